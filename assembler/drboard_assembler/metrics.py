@@ -1,0 +1,123 @@
+"""Training and evaluation metrics files -> evaluation runs and the training summary."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from . import limits
+from .errors import AssemblyError
+from .reading import validate_json
+from .record import CurvePoint, EvaluationRun, Lap, TrainingSummary
+
+NonNegative = Annotated[int, Field(ge=0)]
+Percent = Annotated[float, Field(ge=0, le=100)]
+
+
+class _Entry(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+    completion_percentage: Percent
+    elapsed_time_in_milliseconds: Annotated[int, Field(ge=0, le=limits.MAX_LAP_MS)]
+    episode_status: Annotated[str, Field(max_length=32)] = ""
+    trial: NonNegative = 0
+
+
+class _EvaluationEntry(_Entry):
+    off_track_count: NonNegative = 0
+    crash_count: NonNegative = 0
+    reset_count: NonNegative = 0
+
+
+class _TrainingEntry(_Entry):
+    episode: NonNegative = 0
+    phase: str = "training"
+    reward_score: float = 0.0
+    start_time: float | None = None
+    metric_time: float | None = None
+
+
+class _EvaluationFile(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+    metrics: list[_EvaluationEntry]
+
+
+class _TrainingFile(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+    metrics: list[_TrainingEntry]
+
+
+def load_evaluation(data: bytes, name: str) -> EvaluationRun:
+    entries = validate_json(_EvaluationFile, data, name).metrics
+    if not entries:
+        raise AssemblyError(name, "metrics", "holds no laps")
+    if len(entries) > limits.MAX_LAPS_PER_RUN:
+        raise AssemblyError(name, "metrics",
+                            f"holds {len(entries)} laps, over the limit of {limits.MAX_LAPS_PER_RUN}")
+    laps = [
+        Lap(
+            trial=entry.trial or number,
+            time_ms=entry.elapsed_time_in_milliseconds,
+            completion_pct=entry.completion_percentage,
+            status=entry.episode_status,
+            off_track=entry.off_track_count,
+            crashes=entry.crash_count,
+            resets=entry.reset_count,
+        )
+        for number, entry in enumerate(entries, start=1)
+    ]
+    return EvaluationRun.from_laps(name, laps)
+
+
+def load_training(files: list[tuple[bytes, str]], training_track: str | None) -> TrainingSummary:
+    """Summarise one or more training metrics files (one per DeepRacer-for-Cloud worker)."""
+    episodes: list[_TrainingEntry] = []
+    duration_s = 0.0
+    for data, name in files:
+        entries = validate_json(_TrainingFile, data, name).metrics
+        training = [e for e in entries if e.phase.strip().lower() == "training"]
+        episodes.extend(training)
+        duration_s = max(duration_s, _duration_s(entries))
+        del entries
+    rewards = [e.reward_score for e in episodes]
+    completions = [e.completion_percentage for e in episodes]
+    return TrainingSummary(
+        track=training_track,
+        episodes=len(episodes),
+        training_time_s=round(duration_s, 1),
+        best_reward=max(rewards) if rewards else None,
+        mean_reward=_round(sum(rewards) / len(rewards)) if rewards else None,
+        best_completion_pct=max(completions, default=0.0),
+        mean_completion_pct=_round(sum(completions) / len(completions)) if completions else 0.0,
+        completed_laps=sum(1 for c in completions if c >= 100),
+        curve=_curve(episodes),
+    )
+
+
+def _duration_s(entries: list[_TrainingEntry]) -> float:
+    starts = [e.start_time for e in entries if e.start_time is not None]
+    ends = [e.metric_time for e in entries if e.metric_time is not None]
+    if not starts or not ends:
+        return sum(e.elapsed_time_in_milliseconds for e in entries) / 1000
+    return max(0.0, (max(ends) - min(starts)) / 1000)
+
+
+def _curve(episodes: list[_TrainingEntry]) -> list[CurvePoint]:
+    """At most MAX_CURVE_POINTS points: the mean reward and completion of equal buckets."""
+    ordered = sorted(episodes, key=lambda e: e.episode)
+    if not ordered:
+        return []
+    buckets = min(limits.MAX_CURVE_POINTS, len(ordered))
+    points = []
+    for index in range(buckets):
+        chunk = ordered[index * len(ordered) // buckets:(index + 1) * len(ordered) // buckets]
+        points.append(CurvePoint(
+            episode=chunk[-1].episode,
+            reward=_round(sum(e.reward_score for e in chunk) / len(chunk)),
+            completion_pct=_round(sum(e.completion_percentage for e in chunk) / len(chunk)),
+        ))
+    return points
+
+
+def _round(value: float) -> float:
+    return round(value, 2)

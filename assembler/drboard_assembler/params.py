@@ -1,0 +1,86 @@
+"""Run parameter files (training_params*.yaml, evaluation_params.yaml, eval_params_*.yaml).
+
+Values arrive as quoted strings, typed scalars or one-item lists depending on who wrote the file,
+so every accessor normalises them.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import PurePosixPath
+from typing import Any, Literal
+
+from .errors import AssemblyError
+from .reading import parse_yaml
+
+ParamsKind = Literal["training", "evaluation"]
+
+_EVALUATION_NAME = re.compile(r"^(evaluation_params|eval_params)", re.IGNORECASE)
+_TRUE = {"true", "yes", "1", "on"}
+_FALSE = {"false", "no", "0", "off"}
+
+
+@dataclass(frozen=True)
+class RunParams:
+    name: str
+    kind: ParamsKind
+    values: dict[str, Any]
+
+    def text(self, key: str) -> str | None:
+        value = self.values.get(key)
+        if isinstance(value, list):
+            if len(value) != 1:
+                raise AssemblyError(self.name, key, f"expected one value, found {len(value)}")
+            value = value[0]
+        if value is None:
+            return None
+        if isinstance(value, dict | list):
+            raise AssemblyError(self.name, key, "expected a single value")
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        text = str(value).strip()
+        return text or None
+
+    def flag(self, key: str) -> bool | None:
+        text = self.text(key)
+        if text is None:
+            return None
+        if text.lower() in _TRUE:
+            return True
+        if text.lower() in _FALSE:
+            return False
+        raise AssemblyError(self.name, key, f"expected true or false, found {text!r}")
+
+    @property
+    def metrics_file(self) -> str | None:
+        """The base name of the metrics file this run wrote (``METRICS_S3_OBJECT_KEY``)."""
+        key = self.text("METRICS_S3_OBJECT_KEY")
+        return PurePosixPath(key).name if key else None
+
+
+def load_params(data: bytes, name: str) -> RunParams:
+    values = parse_yaml(data, name)
+    for key in values:
+        if not isinstance(key, str):
+            raise AssemblyError(name, str(key), "keys must be names")
+    return RunParams(name=name, kind=_kind(values, name), values=values)
+
+
+def _kind(values: dict[str, Any], name: str) -> ParamsKind:
+    # The job type decides: DeepRacer on AWS writes an evaluation's parameters as
+    # training_params.yaml.
+    job = str(_first(values.get("JOB_TYPE")) or "").strip().upper()
+    if job == "EVALUATION":
+        return "evaluation"
+    if job == "TRAINING":
+        return "training"
+    if _EVALUATION_NAME.match(PurePosixPath(name).name):
+        return "evaluation"
+    if "NUMBER_OF_TRIALS" in values and "NUMBER_OF_EPISODES" not in values:
+        return "evaluation"
+    return "training"
+
+
+def _first(value: Any) -> Any:
+    return value[0] if isinstance(value, list) and value else value

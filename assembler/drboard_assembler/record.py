@@ -1,0 +1,304 @@
+"""The Record: one submission to the board, as the assembler builds it and the server re-validates it.
+
+Derived figures (laps completed, best lap, ...) travel with the record for readers, but the model
+recomputes them from the laps and refuses a record whose figures disagree, so a client cannot
+claim a time its laps do not show. ``submission_id`` is the sha256 of the record's canonical
+content, so pushing the same run twice is recognised as a duplicate.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from enum import StrEnum
+from typing import Annotated, Any, Literal, Self
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StringConstraints,
+    model_validator,
+)
+
+from . import limits
+from .catalog import default_catalog
+
+SCHEMA_VERSION = 1
+#: Laps faster than the track's length driven at this multiple of the model's top speed are refused.
+PLAUSIBLE_SPEED_FACTOR = 2.0
+
+Name = Annotated[
+    str,
+    StringConstraints(
+        strip_whitespace=True, min_length=1, max_length=limits.MAX_NAME_CHARS,
+        pattern=r"^[^\x00-\x1f\x7f]+$",
+    ),
+]
+Text = Annotated[str, StringConstraints(max_length=limits.MAX_TEXT_CHARS)]
+Sha256 = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
+Count = Annotated[int, Field(ge=0, le=1_000_000)]
+Percent = Annotated[float, Field(ge=0, le=100)]
+
+
+class RaceType(StrEnum):
+    TIME_TRIAL = "TIME_TRIAL"
+    OBJECT_AVOIDANCE = "OBJECT_AVOIDANCE"
+    HEAD_TO_HEAD_RACING = "HEAD_TO_HEAD_RACING"
+
+
+class SourceLayout(StrEnum):
+    CONSOLE = "console"
+    DRFC = "drfc"
+    DROA = "droa"
+    PLAIN = "plain"
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Lap(Strict):
+    trial: Annotated[int, Field(ge=0, le=100_000)]
+    time_ms: Annotated[int, Field(ge=0, le=limits.MAX_LAP_MS)]
+    completion_pct: Percent
+    status: Annotated[str, StringConstraints(max_length=32)]
+    off_track: Count = 0
+    crashes: Count = 0
+    resets: Count = 0
+
+    @property
+    def complete(self) -> bool:
+        # "In progress" at 100 % happens in continuous evaluations: completion decides.
+        return self.completion_pct >= 100
+
+
+class EvaluationRun(Strict):
+    """One evaluation (one metrics file): its laps and the figures derived from them."""
+
+    source: Text
+    laps: Annotated[list[Lap], Field(min_length=1, max_length=limits.MAX_LAPS_PER_RUN)]
+    laps_completed: Count
+    best_lap_ms: int | None
+    average_lap_ms: int | None
+    total_time_ms: int
+    best_completion_pct: Percent
+    off_track_total: Count
+    resets_total: Count
+
+    @classmethod
+    def from_laps(cls, source: str, laps: list[Lap]) -> EvaluationRun:
+        return cls(source=source, laps=laps, **_derived(laps))
+
+    @model_validator(mode="after")
+    def _figures_match_laps(self) -> Self:
+        for name, expected in _derived(self.laps).items():
+            if getattr(self, name) != expected:
+                raise ValueError(f"{name} is {getattr(self, name)!r} but the laps give {expected!r}")
+        return self
+
+    @property
+    def completed_times(self) -> list[int]:
+        return [lap.time_ms for lap in self.laps if lap.complete]
+
+
+def _derived(laps: list[Lap]) -> dict[str, Any]:
+    done = [lap.time_ms for lap in laps if lap.complete]
+    return {
+        "laps_completed": len(done),
+        "best_lap_ms": min(done) if done else None,
+        "average_lap_ms": round(sum(done) / len(done)) if done else None,
+        "total_time_ms": sum(lap.time_ms for lap in laps),
+        "best_completion_pct": max((lap.completion_pct for lap in laps), default=0.0),
+        "off_track_total": sum(lap.off_track for lap in laps),
+        "resets_total": sum(lap.resets for lap in laps),
+    }
+
+
+class Action(Strict):
+    steering_angle: Annotated[float, Field(ge=-90, le=90)]
+    speed: Annotated[float, Field(gt=0, le=10)]
+    index: Annotated[int, Field(ge=0, le=limits.MAX_ACTIONS)] | None = None
+
+
+class Range(Strict):
+    low: float
+    high: float
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Self:
+        if self.low > self.high:
+            raise ValueError(f"low {self.low} is above high {self.high}")
+        return self
+
+
+class ActionSpace(Strict):
+    type: Literal["discrete", "continuous"]
+    actions: Annotated[list[Action], Field(max_length=limits.MAX_ACTIONS)] | None = None
+    speed: Range | None = None
+    steering_angle: Range | None = None
+    max_speed: Annotated[float, Field(gt=0, le=10)]
+    max_steering: Annotated[float, Field(ge=0, le=90)]
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Self:
+        if self.type == "discrete":
+            if not self.actions:
+                raise ValueError("a discrete action space needs at least one action")
+            speed = max(a.speed for a in self.actions)
+            steering = max(abs(a.steering_angle) for a in self.actions)
+        else:
+            if self.speed is None or self.steering_angle is None:
+                raise ValueError("a continuous action space needs speed and steering_angle ranges")
+            if not 0 < self.speed.high <= 10 or self.speed.low < 0:
+                raise ValueError("speed range must lie within 0..10 m/s")
+            if max(abs(self.steering_angle.low), abs(self.steering_angle.high)) > 90:
+                raise ValueError("steering_angle range must lie within -90..90 degrees")
+            speed = self.speed.high
+            steering = max(abs(self.steering_angle.low), abs(self.steering_angle.high))
+        if (self.max_speed, self.max_steering) != (speed, steering):
+            raise ValueError("max_speed and max_steering must match the actions")
+        return self
+
+
+Scalar = bool | int | float | Annotated[str, StringConstraints(max_length=limits.MAX_NAME_CHARS)]
+
+
+class Hyperparameters(Strict):
+    """The training hyperparameters; PPO and SAC use different keys, so all are optional."""
+
+    batch_size: Annotated[int, Field(gt=0, le=100_000)] | None = None
+    beta_entropy: float | None = None
+    discount_factor: Annotated[float, Field(ge=0, le=1)] | None = None
+    e_greedy_value: float | None = None
+    epsilon_steps: Annotated[int, Field(ge=0)] | None = None
+    exploration_type: Annotated[str, StringConstraints(max_length=32)] | None = None
+    loss_type: Literal["huber", "mean_squared_error"] | None = None
+    lr: Annotated[float, Field(gt=0, le=1)] | None = None
+    num_episodes_between_training: Annotated[int, Field(gt=0, le=100_000)] | None = None
+    num_epochs: Annotated[int, Field(gt=0, le=10_000)] | None = None
+    stack_size: Annotated[int, Field(gt=0, le=100)] | None = None
+    term_cond_avg_score: float | None = None
+    term_cond_max_episodes: Annotated[int, Field(ge=0)] | None = None
+    sac_alpha: float | None = None
+    other: Annotated[dict[Annotated[str, StringConstraints(max_length=64)], Scalar],
+                     Field(max_length=limits.MAX_HYPERPARAMETERS)] = Field(default_factory=dict)
+
+
+class Design(Strict):
+    """How the model was built: what the board shows racers besides times."""
+
+    algorithm: Literal["clipped_ppo", "sac"]
+    action_space: ActionSpace
+    sensors: Annotated[list[Annotated[str, StringConstraints(max_length=32)]],
+                       Field(max_length=limits.MAX_SENSORS)]
+    neural_network: Annotated[str, StringConstraints(max_length=64)] | None = None
+    metadata_version: Annotated[str, StringConstraints(max_length=16)] | None = None
+    hyperparameters: Hyperparameters
+
+
+class CurvePoint(Strict):
+    episode: Count
+    reward: float
+    completion_pct: Percent
+
+
+class TrainingSummary(Strict):
+    track: Annotated[str, StringConstraints(max_length=limits.MAX_NAME_CHARS)] | None = None
+    episodes: Count
+    training_time_s: Annotated[float, Field(ge=0)]
+    best_reward: float | None
+    mean_reward: float | None
+    best_completion_pct: Percent
+    mean_completion_pct: Percent
+    completed_laps: Count
+    curve: Annotated[list[CurvePoint], Field(max_length=limits.MAX_CURVE_POINTS)]
+
+
+class SourceFile(Strict):
+    role: Literal[
+        "model_metadata", "hyperparameters", "training_params", "evaluation_params",
+        "training_metrics", "evaluation_metrics",
+    ]
+    path: Text
+    sha256: Sha256
+    bytes: Annotated[int, Field(ge=0)]
+
+
+class Record(Strict):
+    schema_version: Literal[1] = SCHEMA_VERSION
+    submission_id: Sha256
+    track: Annotated[str, StringConstraints(min_length=1, max_length=limits.MAX_NAME_CHARS)]
+    custom_track: bool = False
+    direction: Literal["cw", "ccw"] | None = None
+    racer: Name
+    model_name: Name
+    race_type: RaceType = RaceType.TIME_TRIAL
+    source_layout: SourceLayout
+    assembler_version: Annotated[str, StringConstraints(max_length=32)]
+    evaluations: Annotated[list[EvaluationRun],
+                           Field(min_length=1, max_length=limits.MAX_EVALUATION_RUNS)]
+    design: Design
+    training: TrainingSummary | None = None
+    provenance: Annotated[list[SourceFile], Field(max_length=limits.MAX_EVALUATION_RUNS * 2 + 8)]
+
+    @classmethod
+    def build(cls, **fields: Any) -> Record:
+        """Build a record, computing its submission id from its content."""
+        fields["submission_id"] = "0" * 64
+        draft = cls.model_validate(fields, context={"draft": True})
+        return draft.model_copy(update={"submission_id": content_hash(draft)})
+
+    @model_validator(mode="after")
+    def _check(self, info: Any) -> Self:
+        self._check_track()
+        self._check_lap_times()
+        if not (info.context or {}).get("draft") and self.submission_id != content_hash(self):
+            raise ValueError("submission_id does not match the record's content")
+        return self
+
+    def _check_track(self) -> None:
+        catalog = default_catalog()
+        if self.custom_track:
+            if catalog.lookup(self.track):
+                raise ValueError(f"track {self.track!r} is an official track, not a custom one")
+        elif not catalog.is_official(self.track):
+            raise ValueError(f"track {self.track!r} is not an official WORLD_NAME")
+
+    def _check_lap_times(self) -> None:
+        track = default_catalog().get(self.track)
+        if track is None:
+            return
+        fastest_ms = track.length_m / (self.design.action_space.max_speed * PLAUSIBLE_SPEED_FACTOR)
+        fastest_ms *= 1000
+        for run in self.evaluations:
+            for lap in run.laps:
+                if lap.complete and lap.time_ms < fastest_ms:
+                    raise ValueError(
+                        f"{run.source}: lap {lap.trial} time {lap.time_ms} ms is faster than "
+                        f"possible on {self.track} ({track.length_m} m) at "
+                        f"{self.design.action_space.max_speed} m/s"
+                    )
+
+    @property
+    def best_run(self) -> EvaluationRun:
+        return min(self.evaluations, key=_run_order)
+
+    def canonical_json(self) -> str:
+        return self.model_dump_json(exclude_none=False)
+
+
+def _run_order(run: EvaluationRun) -> tuple[int, float]:
+    if run.best_lap_ms is not None:
+        return (0, run.best_lap_ms)
+    return (1, -run.best_completion_pct)
+
+
+def content_hash(record: Record) -> str:
+    content = record.model_dump(mode="json", exclude={"submission_id", "assembler_version"})
+    canonical = json.dumps(content, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def record_json_schema() -> dict[str, Any]:
+    return Record.model_json_schema(mode="validation")
