@@ -16,7 +16,8 @@ _PARAMS = re.compile(r"^(training_params|evaluation_params|eval_params)([_-][\w.
 _TRAINING = re.compile(r"^(TrainingMetrics.*|training-.+|.+-training-.+|training(_metrics)?)\.json$",
                        re.IGNORECASE)
 _EVALUATION = re.compile(
-    r"^(EvaluationMetrics.*|evaluation-.+|.+-evaluation-.+|evaluation(_metrics)?)\.json$",
+    r"^(EvaluationMetrics.*|EvalMetrics.*|evaluation-.+|.+-(evaluation|submission)-.+"
+    r"|evaluation(_metrics)?)\.json$",
     re.IGNORECASE)
 
 
@@ -81,7 +82,7 @@ def _classify(found: RunFiles, path: Path) -> None:
     elif _PARAMS.match(name):
         found.params.append(path)
     elif name.lower().endswith(".json") and (
-        _EVALUATION.match(name) or (parent == "evaluation" and under_metrics)
+        _EVALUATION.match(name) or (parent in ("evaluation", "submission") and under_metrics)
     ):
         found.evaluation_metrics.append(path)
     elif name.lower().endswith(".json") and (

@@ -30,8 +30,9 @@ class RunParams:
     def text(self, key: str) -> str | None:
         value = self.values.get(key)
         if isinstance(value, list):
-            if len(value) != 1:
-                raise AssemblyError(self.name, key, f"expected one value, found {len(value)}")
+            # DeepRacer-for-Cloud lists one value per car; the racer's own car comes first.
+            if not value:
+                return None
             value = value[0]
         if value is None:
             return None
@@ -68,10 +69,10 @@ def load_params(data: bytes, name: str) -> RunParams:
 
 
 def _kind(values: dict[str, Any], name: str) -> ParamsKind:
-    # The job type decides: DeepRacer on AWS writes an evaluation's parameters as
-    # training_params.yaml.
+    # The job type decides: DeepRacer on AWS writes every job's parameters, evaluations and
+    # submissions included, as training_params.yaml.
     job = str(_first(values.get("JOB_TYPE")) or "").strip().upper()
-    if job == "EVALUATION":
+    if job in ("EVALUATION", "SUBMISSION"):
         return "evaluation"
     if job == "TRAINING":
         return "training"

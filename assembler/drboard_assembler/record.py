@@ -44,7 +44,10 @@ Percent = Annotated[float, Field(ge=0, le=100)]
 class RaceType(StrEnum):
     TIME_TRIAL = "TIME_TRIAL"
     OBJECT_AVOIDANCE = "OBJECT_AVOIDANCE"
+    HEAD_TO_BOT = "HEAD_TO_BOT"
+    HEAD_TO_MODEL = "HEAD_TO_MODEL"
     HEAD_TO_HEAD_RACING = "HEAD_TO_HEAD_RACING"
+    F1 = "F1"
 
 
 class SourceLayout(StrEnum):

@@ -1,0 +1,1 @@
+"""The `drboard` command: a thin layer over the assembler and the leaderboard service."""

@@ -1,0 +1,247 @@
+"""How results look: rich tables for people, JSON, CSV and Markdown for scripts and posts."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections.abc import Iterable
+from typing import Any
+
+from drboard_assembler.record import Record
+from drboard_functions.models import (
+    BoardPage,
+    BoardView,
+    Design,
+    EntryView,
+    HistoryItem,
+    PushReceipt,
+    RacerView,
+)
+from rich.console import Console, Group
+from rich.table import Table
+from rich.text import Text
+
+DASH = "—"
+_ALGORITHMS = {"clipped_ppo": "PPO", "sac": "SAC"}
+
+
+def seconds(ms: int | None) -> str:
+    return DASH if ms is None else f"{ms / 1000:.3f} s"
+
+
+def gap(ms: int | None) -> str:
+    if ms is None:
+        return DASH
+    return "leader" if ms == 0 else f"+{ms / 1000:.3f} s"
+
+
+def percent(value: float) -> str:
+    return f"{value:g} %"
+
+
+def design_summary(design: Design) -> str:
+    algorithm = _ALGORITHMS.get(design.algorithm, design.algorithm)
+    space = f"{design.actions} actions" if design.actions else "continuous"
+    return f"{algorithm} · {space} · {design.max_speed:g} m/s · ±{design.max_steering:g}°"
+
+
+def _time_label(entry: EntryView) -> str:
+    return seconds(entry.time_ms) if entry.qualified else f"{percent(entry.best_completion_pct)} done"
+
+
+# ---- boards ----------------------------------------------------------------------------------
+
+
+def board_table(page: BoardPage) -> Table:
+    board = page.board
+    table = Table(
+        title=f"{board.title} · {board.board_id}",
+        caption=f"{board.participants} racers · {method_label(board)}",
+        header_style="bold",
+    )
+    for name, justify in [("Rank", "right"), ("Racer", "left"), ("Model", "left"),
+                          ("Time", "right"), ("Gap", "right"), ("Laps", "right"),
+                          ("Design", "left"), ("Submitted", "left")]:
+        table.add_column(name, justify=justify)  # type: ignore[arg-type]
+    for entry in page.entries:
+        style = None if entry.qualified else "dim"
+        table.add_row(
+            str(entry.rank), entry.racer, entry.model_name, _time_label(entry), gap(entry.gap_ms),
+            str(entry.laps_completed), design_summary(entry.design),
+            entry.submitted_at.strftime("%Y-%m-%d %H:%M"), style=style,
+        )
+    return table
+
+
+def method_label(board: BoardView) -> str:
+    names = {"BEST_LAP_TIME": "best lap", "AVG_LAP_TIME": "average lap",
+             "TOTAL_TIME": "total time"}
+    laps = "lap" if board.min_laps == 1 else "laps"
+    return f"{names[board.method.value]}, {board.min_laps} {laps} to qualify"
+
+
+def boards_table(boards: list[BoardView]) -> Table:
+    table = Table(title="Boards", header_style="bold")
+    for name in ("Board", "Track", "Race type", "Method", "Racers"):
+        table.add_column(name)
+    for board in boards:
+        track = board.track_name + (" (clockwise)" if board.direction == "cw" else "")
+        table.add_row(board.board_id, track, board.race_type.value, method_label(board),
+                      str(board.participants))
+    return table
+
+
+CSV_FIELDS = ["rank", "racer", "model_name", "qualified", "time_s", "gap_s", "best_lap_s",
+              "laps_completed", "best_completion_pct", "algorithm", "action_space", "actions",
+              "max_speed", "max_steering", "submitted_at", "submission_id"]
+
+
+def _flat(entry: EntryView) -> dict[str, Any]:
+    def s(ms: int | None) -> str:
+        return "" if ms is None else f"{ms / 1000:.3f}"
+
+    return {
+        "rank": entry.rank, "racer": entry.racer, "model_name": entry.model_name,
+        "qualified": entry.qualified, "time_s": s(entry.time_ms), "gap_s": s(entry.gap_ms),
+        "best_lap_s": s(entry.best_lap_ms), "laps_completed": entry.laps_completed,
+        "best_completion_pct": entry.best_completion_pct, "algorithm": entry.design.algorithm,
+        "action_space": entry.design.action_space, "actions": entry.design.actions or "",
+        "max_speed": entry.design.max_speed, "max_steering": entry.design.max_steering,
+        "submitted_at": entry.submitted_at.isoformat(), "submission_id": entry.submission_id,
+    }
+
+
+def board_csv(page: BoardPage) -> str:
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=CSV_FIELDS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(_flat(entry) for entry in page.entries)
+    return out.getvalue()
+
+
+def board_markdown(page: BoardPage) -> str:
+    board = page.board
+    lines = [f"## {board.title} ({board.board_id})", "",
+             f"{board.participants} racers · {method_label(board)}", "",
+             "| Rank | Racer | Model | Time | Gap | Laps | Design |",
+             "|---:|---|---|---:|---:|---:|---|"]
+    for entry in page.entries:
+        cells = [str(entry.rank), entry.racer, entry.model_name, _time_label(entry),
+                 gap(entry.gap_ms), str(entry.laps_completed), design_summary(entry.design)]
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def board_json(page: BoardPage) -> str:
+    return page.model_dump_json(indent=2) + "\n"
+
+
+# ---- push, history, show ---------------------------------------------------------------------
+
+
+def receipt_line(receipt: PushReceipt) -> Text:
+    entry = receipt.entry
+    pushed = receipt.submission
+    result = seconds(pushed.time_ms) if pushed.qualified else (
+        f"{percent(pushed.best_completion_pct)} done, not qualified")
+    text = Text()
+    text.append(f"{entry.racer}", style="bold")
+    text.append(f" · {pushed.model_name} · {receipt.board_id} · {result} · ")
+    text.append(f"rank {receipt.rank} of {receipt.participants}", style="bold")
+    if receipt.status == "duplicate":
+        text.append(" · already on the board, nothing changed", style="yellow")
+    elif receipt.improved:
+        text.append(" · new best", style="green")
+    else:
+        text.append(f" · not better than your best ({_time_label(entry)})", style="yellow")
+    if receipt.rank > 1 and entry.gap_ms is not None:
+        text.append(f" · {gap(entry.gap_ms)} to the leader")
+    return text
+
+
+def history_table(racer: str, items: Iterable[HistoryItem]) -> Table:
+    table = Table(title=f"History of {racer}", header_style="bold")
+    for name in ("Submitted", "Board", "Model", "Result", "Best lap", "Laps", "Best"):
+        table.add_column(name)
+    for item in items:
+        result = seconds(item.time_ms) if item.qualified else f"{percent(item.best_completion_pct)}"
+        table.add_row(item.submitted_at.strftime("%Y-%m-%d %H:%M:%S"), item.board_id,
+                      item.model_name, result, seconds(item.best_lap_ms),
+                      str(item.laps_completed), "★" if item.is_best else "")
+    return table
+
+
+def racer_panel(view: RacerView) -> Group:
+    record = view.record
+    entry = view.entry
+    summary = Table.grid(padding=(0, 2))
+    summary.add_column(style="bold")
+    summary.add_column()
+    summary.add_row("Racer", f"{view.racer} · rank {entry.rank} of {view.board.participants} on "
+                    f"{view.board.board_id}")
+    summary.add_row("Result", f"{_time_label(entry)} · gap {gap(entry.gap_ms)}")
+    summary.add_row("Model", f"{record.model_name} ({record.source_layout.value} files)")
+    design = record.design
+    summary.add_row("Algorithm", _ALGORITHMS.get(design.algorithm, design.algorithm))
+    summary.add_row("Network", design.neural_network or DASH)
+    summary.add_row("Sensors", ", ".join(design.sensors) or DASH)
+    if record.training:
+        t = record.training
+        summary.add_row("Training", f"{t.episodes} episodes on {t.track or DASH}, "
+                        f"{t.training_time_s / 3600:.1f} h, best reward {t.best_reward}, "
+                        f"{t.completed_laps} laps completed")
+    return Group(summary, hyperparameter_table(record), action_space_table(record),
+                 laps_table(record))
+
+
+def hyperparameter_table(record: Record) -> Table:
+    table = Table(title="Hyperparameters", header_style="bold")
+    table.add_column("Name")
+    table.add_column("Value", justify="right")
+    values = record.design.hyperparameters.model_dump(exclude={"other"}, exclude_none=True)
+    values |= record.design.hyperparameters.other
+    for name, value in sorted(values.items()):
+        table.add_row(name, str(value))
+    return table
+
+
+def action_space_table(record: Record) -> Table:
+    space = record.design.action_space
+    if space.type == "continuous" and space.speed and space.steering_angle:
+        table = Table(title="Action space (continuous)", header_style="bold")
+        table.add_column("")
+        table.add_column("Low", justify="right")
+        table.add_column("High", justify="right")
+        table.add_row("Speed (m/s)", f"{space.speed.low:g}", f"{space.speed.high:g}")
+        table.add_row("Steering (°)", f"{space.steering_angle.low:g}",
+                      f"{space.steering_angle.high:g}")
+        return table
+    table = Table(title=f"Action space ({len(space.actions or [])} discrete actions)",
+                  header_style="bold")
+    for name in ("#", "Steering (°)", "Speed (m/s)"):
+        table.add_column(name, justify="right")
+    for number, action in enumerate(space.actions or []):
+        index = action.index if action.index is not None else number
+        table.add_row(str(index), f"{action.steering_angle:g}", f"{action.speed:g}")
+    return table
+
+
+def laps_table(record: Record) -> Table:
+    table = Table(title="Evaluation laps", header_style="bold")
+    for name in ("Run", "Lap", "Time", "Done", "Status", "Off track", "Crashes"):
+        table.add_column(name)
+    for run in record.evaluations:
+        for lap in run.laps:
+            table.add_row(run.source.rsplit("/", 1)[-1], str(lap.trial), seconds(lap.time_ms),
+                          percent(lap.completion_pct), lap.status, str(lap.off_track),
+                          str(lap.crashes))
+    return table
+
+
+def write_json(value: Any) -> str:
+    return json.dumps(value, indent=2, default=str) + "\n"
+
+
+def plain_console(file: io.TextIOBase | Any) -> Console:
+    return Console(file=file, width=140, no_color=True, highlight=False)

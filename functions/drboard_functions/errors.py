@@ -1,0 +1,44 @@
+"""Typed domain errors. Each edge (HTTP handler, CLI) maps them to its statuses in one place."""
+
+from __future__ import annotations
+
+
+class DomainError(Exception):
+    """Base of every error the service raises on purpose."""
+
+    def __init__(self, message: str, *, detail: list[dict[str, str]] | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.detail = detail or []
+
+
+class InvalidSubmission(DomainError):
+    """The record is malformed or inconsistent (HTTP 422)."""
+
+
+class SubmissionTooLarge(DomainError):
+    """The request body is over the size bound (HTTP 413)."""
+
+
+class BoardMismatch(DomainError):
+    """The record does not belong on this board: another track, direction or race type (422)."""
+
+
+class BoardNotFound(DomainError):
+    """No such board (HTTP 404)."""
+
+
+class RacerNotFound(DomainError):
+    """The racer has no entry on the board (HTTP 404)."""
+
+
+class InvalidQuery(DomainError):
+    """A bad cursor, limit or name in a query (HTTP 400)."""
+
+
+class TooSoon(DomainError):
+    """A submission limit applies (HTTP 429); ``retry_after_s`` says when to try again."""
+
+    def __init__(self, message: str, retry_after_s: int) -> None:
+        super().__init__(message)
+        self.retry_after_s = retry_after_s
