@@ -2,10 +2,10 @@
 
 __version__ = "0.1.0"
 
-from .assemble import Overrides, assemble  # noqa: E402
-from .catalog import TrackCatalog, UnknownTrackError, default_catalog  # noqa: E402
-from .errors import AssemblyError  # noqa: E402
-from .record import Record  # noqa: E402
+from .assemble import Overrides, assemble
+from .catalog import TrackCatalog, UnknownTrackError, default_catalog
+from .errors import AssemblyError
+from .record import Record
 
 __all__ = [
     "AssemblyError",

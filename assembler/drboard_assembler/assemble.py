@@ -104,6 +104,10 @@ def _assemble_folder(root: Path, overrides: Overrides, default_model: str) -> Re
 
     track = _choose_track(runs, evaluation_params, overrides, where)
     kept = [(run, p) for run, p in runs if p is None or _names_track(p, track)]
+    if not kept:
+        worlds = sorted({w for _, p in runs if p is not None and (w := p.text("WORLD_NAME"))})
+        raise AssemblyError(where, "WORLD_NAME", f"no evaluation ran on {track.track_id}; the "
+                            f"evaluation parameters name {', '.join(worlds)}", flag="--track")
     if len(kept) > limits.MAX_EVALUATION_RUNS:
         raise AssemblyError(where, "evaluation metrics",
                             f"{len(kept)} evaluation runs, over the limit of "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag
 
 from .errors import AssemblyError
 from .reading import parse_json, validate
@@ -20,9 +20,18 @@ class _ContinuousSpace(BaseModel):
     steering_angle: Range
 
 
+def _action_space_kind(value: Any) -> str:
+    # Choose the branch by shape, so an error names the field at fault (not the other branch).
+    return "discrete" if isinstance(value, list) else "continuous"
+
+
 class _Metadata(BaseModel):
     model_config = ConfigDict(extra="ignore")
-    action_space: Annotated[list[Action], Field(min_length=1)] | _ContinuousSpace
+    action_space: Annotated[
+        Annotated[list[Action], Field(min_length=1), Tag("discrete")]
+        | Annotated[_ContinuousSpace, Tag("continuous")],
+        Discriminator(_action_space_kind),
+    ]
     action_space_type: str | None = None
     training_algorithm: str = "clipped_ppo"
     sensor: list[str] = Field(default_factory=list)

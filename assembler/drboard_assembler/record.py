@@ -24,7 +24,7 @@ from pydantic import (
 from . import limits
 from .catalog import default_catalog
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION: Literal[1] = 1
 #: Laps faster than the track's length driven at this multiple of the model's top speed are refused.
 PLAUSIBLE_SPEED_FACTOR = 2.0
 

@@ -158,7 +158,7 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
             return
         for record in records:
             receipt = ctx.board.push(record, board_id)
-            out.print(render.receipt_line(receipt))
+            out.print(render.receipt_line(receipt), soft_wrap=True)
         config.save_settings(racer=records[-1].racer)
 
 
@@ -167,7 +167,8 @@ def _print_dry_run(path: Path, record: Record) -> None:
     done = max(run.best_completion_pct for run in record.evaluations)
     result = render.seconds(best) if best else f"{render.percent(done)} done"
     out.print(f"{path}: {record.racer} · {record.model_name} · {record.track} · "
-              f"{len(record.evaluations)} evaluation runs · best {result} · not sent (dry run)")
+              f"{len(record.evaluations)} evaluation runs · best {result} · not sent (dry run)",
+              soft_wrap=True)
 
 
 # ---- pull and boards ---------------------------------------------------------------------

@@ -6,7 +6,7 @@ import csv
 import io
 import json
 from collections.abc import Iterable
-from typing import Any
+from typing import IO, Any
 
 from drboard_assembler.record import Record
 from drboard_functions.models import (
@@ -43,7 +43,7 @@ def percent(value: float) -> str:
 def design_summary(design: Design) -> str:
     algorithm = _ALGORITHMS.get(design.algorithm, design.algorithm)
     space = f"{design.actions} actions" if design.actions else "continuous"
-    return f"{algorithm} · {space} · {design.max_speed:g} m/s · ±{design.max_steering:g}°"
+    return f"{algorithm}, {space}, {design.max_speed:g} m/s, ±{design.max_steering:g}°"
 
 
 def _time_label(entry: EntryView) -> str:
@@ -60,16 +60,20 @@ def board_table(page: BoardPage) -> Table:
         caption=f"{board.participants} racers · {method_label(board)}",
         header_style="bold",
     )
-    for name, justify in [("Rank", "right"), ("Racer", "left"), ("Model", "left"),
-                          ("Time", "right"), ("Gap", "right"), ("Laps", "right"),
-                          ("Design", "left"), ("Submitted", "left")]:
-        table.add_column(name, justify=justify)  # type: ignore[arg-type]
+    table.add_column("Rank", justify="right")
+    table.add_column("Racer", overflow="fold")
+    table.add_column("Model", overflow="ellipsis", max_width=24)
+    table.add_column("Time", justify="right", no_wrap=True)
+    table.add_column("Gap", justify="right", no_wrap=True)
+    table.add_column("Laps", justify="right")
+    table.add_column("Design")
+    table.add_column("Submitted", no_wrap=True)
     for entry in page.entries:
         style = None if entry.qualified else "dim"
         table.add_row(
             str(entry.rank), entry.racer, entry.model_name, _time_label(entry), gap(entry.gap_ms),
             str(entry.laps_completed), design_summary(entry.design),
-            entry.submitted_at.strftime("%Y-%m-%d %H:%M"), style=style,
+            entry.submitted_at.strftime("%b %d %H:%M"), style=style,
         )
     return table
 
@@ -243,5 +247,5 @@ def write_json(value: Any) -> str:
     return json.dumps(value, indent=2, default=str) + "\n"
 
 
-def plain_console(file: io.TextIOBase | Any) -> Console:
+def plain_console(file: IO[str]) -> Console:
     return Console(file=file, width=140, no_color=True, highlight=False)

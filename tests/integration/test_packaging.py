@@ -1,0 +1,40 @@
+"""A non-editable install must put only the drboard_* packages into site-packages."""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory: pytest.TempPathFactory) -> zipfile.ZipFile:
+    out = tmp_path_factory.mktemp("wheel")
+    build = tmp_path_factory.mktemp("build")
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+         "-w", str(out), str(ROOT)],
+        check=True, cwd=build,
+    )
+    (path,) = out.glob("drboard-*.whl")
+    return zipfile.ZipFile(path)
+
+
+def test_only_drboard_packages_are_installed(wheel: zipfile.ZipFile) -> None:
+    top_level = {name.split("/")[0] for name in wheel.namelist()}
+    packages = {name for name in top_level if not name.endswith(".dist-info")}
+    assert packages == {"drboard_assembler", "drboard_functions", "drboard_cli"}
+
+
+def test_the_track_catalog_and_record_schema_ship_with_the_package(wheel: zipfile.ZipFile) -> None:
+    names = set(wheel.namelist())
+    assert "drboard_assembler/data/tracks.csv" in names
+    assert "drboard_assembler/data/record.schema.json" in names
+
+
+def test_the_drboard_command_is_installed(wheel: zipfile.ZipFile) -> None:
+    (entry_points,) = [n for n in wheel.namelist() if n.endswith("entry_points.txt")]
+    assert "drboard = drboard_cli.main:cli" in wheel.read(entry_points).decode()
