@@ -27,7 +27,8 @@ def unpack(archive: Path, into: Path) -> Path:
             members = _checked_members(tar, name)
             tar.extractall(into, members=members, filter="data")
     except tarfile.TarError as error:
-        raise AssemblyError(name, "", f"not a readable tar archive ({error})") from None
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise AssemblyError(name, "", f"not a readable tar archive ({reason})") from None
     except (OSError, EOFError) as error:
         raise AssemblyError(name, "", f"cannot be unpacked ({error})") from None
     return _single_top_folder(into)
@@ -51,7 +52,7 @@ def _checked_members(tar: tarfile.TarFile, name: str) -> list[tarfile.TarInfo]:
         total += member.size
         if total > limits.MAX_ARCHIVE_UNPACKED_BYTES:
             raise AssemblyError(name, member.name, "the archive unpacks to more than "
-                                f"{limits.MAX_ARCHIVE_UNPACKED_BYTES // limits.MIB} MiB")
+                                f"{limits.MAX_ARCHIVE_UNPACKED_BYTES:,} bytes")
         members.append(member)
     return members
 

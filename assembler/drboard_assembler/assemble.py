@@ -18,7 +18,7 @@ from .layout import RunFiles, find_run_files, shallowest
 from .metrics import load_evaluation, load_training
 from .params import RunParams, load_params
 from .reading import from_validation_error, read_bounded
-from .record import EvaluationRun, RaceType, Record, SourceFile
+from .record import EvaluationRun, RaceType, Record, SourceFile, implausible_lap
 
 
 @dataclass(frozen=True)
@@ -117,10 +117,10 @@ def _assemble_folder(root: Path, overrides: Overrides, default_model: str) -> Re
 
     training = None
     if files.training_metrics:
-        training_track = _first_text(training_params, "WORLD_NAME")
+        training_track = _training_track(_first_text(training_params, "WORLD_NAME"))
         training = load_training(
-            [(reader.read(p, "training_metrics", limits.MAX_TRAINING_FILE_BYTES), files.name(p))
-             for p in sorted(files.training_metrics)],
+            ((reader.read(p, "training_metrics", limits.MAX_TRAINING_FILE_BYTES), files.name(p))
+             for p in sorted(files.training_metrics)),
             training_track,
         )
 
@@ -131,6 +131,10 @@ def _assemble_folder(root: Path, overrides: Overrides, default_model: str) -> Re
     model = overrides.model or _first_text(described_by, "MODEL_NAME") or default_model
     race_type = _race_type(run_params, where)
 
+    problem = implausible_lap(track.track_id, design.action_space.max_speed, [r for r, _ in kept])
+    if problem:
+        raise AssemblyError(problem.run.source,
+                            f"metrics[{problem.lap_index}].elapsed_time_in_milliseconds", problem.message)
     fields = {
         "track": track.track_id,
         "custom_track": track.track is None,
@@ -211,6 +215,15 @@ def _resolve(name: str, *, custom: bool, source: str) -> ResolvedTrack:
         field = "" if source == "--track" else "WORLD_NAME"
         hint = "" if error.ambiguous or custom else "; pass --custom-track for a track of your own"
         raise AssemblyError(source, field, f"{error}{hint}") from None
+
+
+def _training_track(world: str | None) -> str | None:
+    if world is None:
+        return None
+    try:
+        return default_catalog().resolve(world).track_id
+    except UnknownTrackError:
+        return world
 
 
 def _first_text(params: list[RunParams], *keys: str) -> str | None:

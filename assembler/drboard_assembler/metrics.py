@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field
+from pydantic.dataclasses import dataclass
 
 from . import limits
 from .errors import AssemblyError
@@ -29,7 +31,13 @@ class _EvaluationEntry(_Entry):
     reset_count: NonNegative = 0
 
 
-class _TrainingEntry(_Entry):
+@dataclass(slots=True, config=ConfigDict(extra="ignore"))
+class _TrainingEntry:
+    # A slotted dataclass, not a model: a 50 MB file holds some 200,000 of these.
+    completion_percentage: Percent
+    elapsed_time_in_milliseconds: Annotated[int, Field(ge=0, le=limits.MAX_LAP_MS)]
+    episode_status: Annotated[str, Field(max_length=32)] = ""
+    trial: NonNegative = 0
     episode: NonNegative = 0
     phase: str = "training"
     reward_score: float = 0.0
@@ -69,8 +77,10 @@ def load_evaluation(data: bytes, name: str) -> EvaluationRun:
     return EvaluationRun.from_laps(name, laps)
 
 
-def load_training(files: list[tuple[bytes, str]], training_track: str | None) -> TrainingSummary:
-    """Summarise one or more training metrics files (one per DeepRacer-for-Cloud worker)."""
+def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None) -> TrainingSummary:
+    """Summarise one or more training metrics files (one per DeepRacer-for-Cloud worker).
+
+    ``files`` may be a generator, so that only one file's bytes are in memory at a time."""
     episodes: list[_TrainingEntry] = []
     duration_s = 0.0
     for data, name in files:

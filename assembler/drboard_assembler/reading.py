@@ -29,11 +29,11 @@ def read_bounded(path: Path, name: str, max_bytes: int) -> bytes:
 
 
 def _size(count: int) -> str:
-    for unit in ("bytes", "KiB", "MiB"):
-        if count < 1024 or unit == "MiB":
-            return f"{count:.0f} {unit}" if unit == "bytes" else f"{count:.1f} {unit}"
-        count //= 1024
-    return f"{count} MiB"  # pragma: no cover
+    if count < 1024:
+        return f"{count} bytes"
+    if count < 1024 * 1024:
+        return f"{count / 1024:.2f} KiB"
+    return f"{count / (1024 * 1024):.2f} MiB"
 
 
 def parse_json(data: bytes, name: str) -> Any:

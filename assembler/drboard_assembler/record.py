@@ -11,7 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 from enum import StrEnum
-from typing import Annotated, Any, Literal, Self
+from typing import Annotated, Any, Literal, NamedTuple, Self
 
 from pydantic import (
     BaseModel,
@@ -269,32 +269,39 @@ class Record(Strict):
             raise ValueError(f"track {self.track!r} is not an official WORLD_NAME")
 
     def _check_lap_times(self) -> None:
-        track = default_catalog().get(self.track)
-        if track is None:
-            return
-        fastest_ms = track.length_m / (self.design.action_space.max_speed * PLAUSIBLE_SPEED_FACTOR)
-        fastest_ms *= 1000
-        for run in self.evaluations:
-            for lap in run.laps:
-                if lap.complete and lap.time_ms < fastest_ms:
-                    raise ValueError(
-                        f"{run.source}: lap {lap.trial} time {lap.time_ms} ms is faster than "
-                        f"possible on {self.track} ({track.length_m} m) at "
-                        f"{self.design.action_space.max_speed} m/s"
-                    )
+        problem = implausible_lap(self.track, self.design.action_space.max_speed, self.evaluations)
+        if problem:
+            raise ValueError(f"{problem.run.source}: {problem.message}")
 
     @property
     def best_run(self) -> EvaluationRun:
-        return min(self.evaluations, key=_run_order)
+        """The run with the fastest completed lap, else the one that got furthest."""
+        return min(self.evaluations, key=lambda run: (
+            (0, run.best_lap_ms) if run.best_lap_ms is not None else (1, -run.best_completion_pct)))
 
-    def canonical_json(self) -> str:
-        return self.model_dump_json(exclude_none=False)
+
+class ImplausibleLap(NamedTuple):
+    run: EvaluationRun
+    lap_index: int
+    message: str
 
 
-def _run_order(run: EvaluationRun) -> tuple[int, float]:
-    if run.best_lap_ms is not None:
-        return (0, run.best_lap_ms)
-    return (1, -run.best_completion_pct)
+def implausible_lap(track_id: str, max_speed: float,
+                    runs: list[EvaluationRun]) -> ImplausibleLap | None:
+    """The first complete lap faster than the track's length driven at PLAUSIBLE_SPEED_FACTOR
+    times the model's top speed (only official tracks have a known length)."""
+    track = default_catalog().get(track_id)
+    if track is None:
+        return None
+    fastest_ms = 1000 * track.length_m / (max_speed * PLAUSIBLE_SPEED_FACTOR)
+    for run in runs:
+        for index, lap in enumerate(run.laps):
+            if lap.complete and lap.time_ms < fastest_ms:
+                return ImplausibleLap(run, index, (
+                    f"lap {lap.trial} time {lap.time_ms} ms is faster than possible: no lap of "
+                    f"{track_id} ({track.length_m} m) takes under {fastest_ms:.0f} ms at the "
+                    f"model's top speed of {max_speed:g} m/s"))
+    return None
 
 
 def content_hash(record: Record) -> str:

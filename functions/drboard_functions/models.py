@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from datetime import datetime
 from enum import StrEnum
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from drboard_assembler.record import RaceType, Record
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 MAX_PAGE = 500
 
@@ -34,8 +34,18 @@ class Model(BaseModel):
 
 
 class BoardRules(Model):
+    """How a board times its racers. ``min_laps`` defaults to the method's own (1, 3, 3)."""
+
     method: TimingMethod = TimingMethod.BEST_LAP_TIME
     min_laps: Annotated[int, Field(ge=1, le=100)] = 1
+
+    @model_validator(mode="before")
+    @classmethod
+    def _method_default_laps(cls, data: Any) -> Any:
+        if isinstance(data, dict) and data.get("min_laps") is None:
+            method = TimingMethod(data.get("method", TimingMethod.BEST_LAP_TIME))
+            data = {**data, "min_laps": DEFAULT_MIN_LAPS[method]}
+        return data
 
 
 class Board(Model):

@@ -34,6 +34,7 @@ from .models import (
 from .stores.base import BoardStore, StoredBoard
 
 Clock = Callable[[], datetime]
+MAX_CURSOR_CHARS = 1024
 
 _RACE_SUFFIX = {
     RaceType.TIME_TRIAL: "",
@@ -305,12 +306,14 @@ class _Cursor:
 
     @classmethod
     def decode(cls, text: str) -> _Cursor:
+        if len(text) > MAX_CURSOR_CHARS:
+            raise InvalidQuery("the cursor is not one this board gave out")
         try:
             raw = base64.urlsafe_b64decode(text + "=" * (-len(text) % 4))
             rank_key, score_key, rank, position = json.loads(raw)
             if not (isinstance(rank_key, str) and isinstance(score_key, str)
                     and isinstance(rank, int) and isinstance(position, int)):
                 raise ValueError
-        except (ValueError, TypeError, binascii.Error, UnicodeDecodeError):
+        except (ValueError, TypeError, RecursionError, binascii.Error, UnicodeDecodeError):
             raise InvalidQuery("the cursor is not one this board gave out") from None
         return cls(rank_key, score_key, rank, position)

@@ -28,7 +28,7 @@ def run(runner: CliRunner, *args: str | Path) -> tuple[int, str, str]:
 
 
 def push_examples(runner: CliRunner) -> None:
-    code, out, err = run(runner, "push", *EXAMPLES)
+    code, _, err = run(runner, "push", *EXAMPLES)
     assert code == 0, err
 
 

@@ -15,7 +15,7 @@ def _readme_commands() -> list[str]:
 def test_quick_start_has_exactly_two_commands() -> None:
     commands = _readme_commands()
     assert len(commands) == 2
-    assert "drboard push examples/*" in commands[0]
+    assert "drboard push examples/*/" in commands[0]
     assert "pytest" in commands[1]
 
 
