@@ -125,6 +125,8 @@ class LeaderboardService:
         )
         outcome = self.store.record_submission(submission, record, entry)
         best = outcome.entry
+        if outcome.duplicate:
+            submission = self._stored_submission(submission)
         rank = self.store.count_better(board.board_id, best.score_key) + 1
         participants = self._require_board(board.board_id).participants
         return PushReceipt(
@@ -137,6 +139,13 @@ class LeaderboardService:
             entry=_entry_view(best, rank, self._leader(board.board_id)),
             submission=_history_item(submission, best),
         )
+
+    def _stored_submission(self, pushed: Submission) -> Submission:
+        """A duplicate's receipt shows the submission as first stored, not the repeat."""
+        for stored in self.store.history(pushed.racer_key, pushed.board_id):
+            if stored.submission_id == pushed.submission_id:
+                return stored
+        return pushed  # pragma: no cover - a duplicate is always in the racer's history
 
     def _board_for(self, record: Record, board_id: str | None, now: datetime) -> StoredBoard:
         default = _default_board(record, now)

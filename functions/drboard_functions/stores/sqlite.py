@@ -7,6 +7,7 @@ is an index range read of N rows whatever the board's size.
 from __future__ import annotations
 
 import sqlite3
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -54,11 +55,24 @@ class SqliteStore:
         # Autocommit mode: every write below opens its own BEGIN IMMEDIATE transaction.
         self._db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT_S, isolation_level=None,
                                    check_same_thread=False)
-        self._db.execute("PRAGMA journal_mode=WAL")
+        self._enable_wal()
         self._db.execute("PRAGMA synchronous=NORMAL")
         with self._write():
             for statement in filter(str.strip, SCHEMA.split(";")):
                 self._db.execute(statement)
+
+    def _enable_wal(self) -> None:
+        # Switching a new file to WAL needs a moment with no other writer, and SQLite does not
+        # apply the busy timeout to it: wait for that moment ourselves.
+        deadline = time.monotonic() + BUSY_TIMEOUT_S
+        while True:
+            try:
+                self._db.execute("PRAGMA journal_mode=WAL")
+                return
+            except sqlite3.OperationalError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.01)
 
     def close(self) -> None:
         self._db.close()

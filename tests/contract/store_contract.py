@@ -1,0 +1,340 @@
+"""The BoardStore contract: one suite every store adapter (SQLite, DynamoDB, ...) must pass.
+
+Use it by subclassing with a ``Test`` name and supplying a ``store`` fixture that yields an
+empty store::
+
+    class TestSqliteContract(StoreContract):
+        @pytest.fixture
+        def store(self, tmp_path):
+            yield SqliteStore(tmp_path / "board.db")
+
+The suite only calls the BoardStore protocol's methods, and builds the Submission and Entry it
+writes the way LeaderboardService.push does (``write_for`` below), so it holds for any adapter.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Sequence
+from datetime import UTC, datetime, timedelta
+
+import pytest
+from drboard_assembler.record import Record
+from drboard_functions import ranking
+from drboard_functions.models import Board, BoardRules, Design, Entry, Submission, WriteOutcome
+from drboard_functions.service import racer_key
+from drboard_functions.stores.base import BoardStore
+
+from tests.recordkit import LapSpec, make_record
+
+T0 = datetime(2025, 3, 1, 12, 0, tzinfo=UTC)
+TRACK = "reInvent2019_track"
+
+
+def at(seconds: float) -> datetime:
+    return T0 + timedelta(seconds=seconds)
+
+
+def make_board(board_id: str = TRACK, track: str = TRACK, title: str = "Smile Speedway",
+               direction: str | None = None) -> Board:
+    return Board.model_validate({
+        "board_id": board_id, "track": track, "direction": direction, "title": title,
+        "rules": BoardRules(), "created_at": T0,
+    })
+
+
+def write_for(record: Record, board: Board, when: datetime) -> tuple[Submission, Entry]:
+    """The submission and candidate entry LeaderboardService.push writes for ``record``."""
+    score = ranking.score_record(record, board.rules)
+    key = racer_key(record.racer)
+    score_key = ranking.score_key(score)
+    space = record.design.action_space
+    submission = Submission(
+        board_id=board.board_id, racer=record.racer, racer_key=key,
+        submission_id=record.submission_id, model_name=record.model_name,
+        submitted_at=when, score=score, score_key=score_key,
+    )
+    entry = Entry(
+        board_id=board.board_id, racer=record.racer, racer_key=key,
+        model_name=record.model_name, submission_id=record.submission_id, achieved_at=when,
+        score=score,
+        design=Design(
+            algorithm=record.design.algorithm, action_space=space.type,
+            actions=len(space.actions) if space.actions else None, max_speed=space.max_speed,
+            max_steering=space.max_steering, sensors=list(record.design.sensors),
+        ),
+        score_key=score_key, rank_key=ranking.rank_key(score_key, when, key),
+    )
+    return submission, entry
+
+
+def submit(store: BoardStore, record: Record, when: datetime, board: Board | None = None) -> WriteOutcome:
+    board = board or make_board()
+    if store.get_board(board.board_id) is None:
+        store.create_board(board)
+    submission, entry = write_for(record, board, when)
+    return store.record_submission(submission, record, entry)
+
+
+def lap(ms: int) -> list[LapSpec]:
+    return [(ms, 100)]
+
+
+def participants(store: BoardStore, board_id: str = TRACK) -> int:
+    stored = store.get_board(board_id)
+    assert stored is not None
+    return stored.participants
+
+
+class StoreContract:
+    """Behaviour every BoardStore adapter shares. Subclasses supply the ``store`` fixture."""
+
+    @pytest.fixture
+    def store(self) -> BoardStore:
+        raise NotImplementedError("a StoreContract subclass must supply an empty `store` fixture")
+
+    # ---- boards -------------------------------------------------------------------------------
+
+    def test_unknown_board_is_none(self, store: BoardStore) -> None:
+        assert store.get_board("nowhere") is None
+        assert store.list_boards() == []
+
+    def test_create_board_returns_the_stored_board(self, store: BoardStore) -> None:
+        board = make_board()
+        stored = store.create_board(board)
+        assert stored.board == board
+        assert stored.participants == 0
+        assert store.get_board(board.board_id) == stored
+
+    def test_create_board_is_idempotent(self, store: BoardStore) -> None:
+        first = make_board(title="First title")
+        store.create_board(first)
+        submit(store, make_record("Ada"), at(1), first)
+        again = store.create_board(make_board(title="Second title"))
+        assert again.board == first
+        assert again.participants == 1
+        assert [s.board for s in store.list_boards()] == [first]
+
+    def test_list_boards_is_ordered_by_id(self, store: BoardStore) -> None:
+        ids = ["reInvent2019_track_cw", "Oval_track", "reInvent2019_track", "2022_april_open",
+               "reInvent2019_track_oa"]
+        for board_id in ids:
+            store.create_board(make_board(board_id, track=board_id.removesuffix("_cw")))
+        assert [s.board.board_id for s in store.list_boards()] == sorted(ids)
+
+    def test_list_boards_reports_participants(self, store: BoardStore) -> None:
+        cw = make_board("reInvent2019_track_cw", direction="cw")
+        submit(store, make_record("Ada"), at(1))
+        submit(store, make_record("Bob"), at(2))
+        submit(store, make_record("Ada", direction="cw"), at(3), cw)
+        assert [(s.board.board_id, s.participants) for s in store.list_boards()] == [
+            (TRACK, 2), ("reInvent2019_track_cw", 1)]
+
+    # ---- record_submission ------------------------------------------------------------------
+
+    def test_first_submission_of_a_racer_creates_the_entry(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(12000))
+        store.create_board(make_board())
+        submission, entry = write_for(record, make_board(), at(1))
+        outcome = store.record_submission(submission, record, entry)
+        assert outcome == WriteOutcome(duplicate=False, improved=True, entry=entry)
+        assert store.get_entry(TRACK, "ada") == entry
+        assert participants(store) == 1
+        assert store.history("ada") == [submission]
+
+    def test_duplicate_submission_changes_nothing(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(12000))
+        first = submit(store, record, at(1))
+        again = submit(store, record, at(5))
+        assert again.duplicate is True
+        assert again.improved is False
+        assert again.entry == first.entry  # the stored entry, with its original time
+        assert store.get_entry(TRACK, "ada") == first.entry
+        assert participants(store) == 1
+        assert [s.submitted_at for s in store.history("ada")] == [at(1)]
+
+    def test_duplicate_of_an_older_submission_keeps_the_best(self, store: BoardStore) -> None:
+        slow, fast = make_record("Ada", lap(13000)), make_record("Ada", lap(12000))
+        submit(store, slow, at(1))
+        best = submit(store, fast, at(2)).entry
+        again = submit(store, slow, at(3))
+        assert (again.duplicate, again.improved, again.entry) == (True, False, best)
+        assert len(store.history("ada")) == 2
+
+    def test_same_record_on_another_board_is_not_a_duplicate(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(12000))
+        submit(store, record, at(1))
+        other = make_board("spring_cup", title="Spring cup")
+        outcome = submit(store, record, at(2), other)
+        assert (outcome.duplicate, outcome.improved) == (False, True)
+        assert participants(store, "spring_cup") == 1
+        assert store.get_record("spring_cup", record.submission_id) == record
+
+    def test_worse_submission_is_kept_in_history_and_the_entry_stays(self, store: BoardStore) -> None:
+        best = submit(store, make_record("Ada", lap(12000)), at(1)).entry
+        worse = make_record("Ada", lap(12500), model="m2")
+        outcome = submit(store, worse, at(2))
+        assert (outcome.duplicate, outcome.improved) == (False, False)
+        assert outcome.entry == best
+        assert store.get_entry(TRACK, "ada") == best
+        assert participants(store) == 1
+        assert [s.submission_id for s in store.history("ada")] == [
+            best.submission_id, worse.submission_id]
+        assert store.get_record(TRACK, worse.submission_id) == worse
+
+    def test_strictly_better_submission_replaces_the_entry(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada", lap(12500)), at(1))
+        better = make_record("Ada", lap(12499), model="m2")
+        _, expected = write_for(better, make_board(), at(2))
+        outcome = submit(store, better, at(2))
+        assert (outcome.duplicate, outcome.improved) == (False, True)
+        assert outcome.entry == expected
+        assert store.get_entry(TRACK, "ada") == expected
+        assert participants(store) == 1
+        assert len(store.history("ada")) == 2
+        assert [e.racer_key for e in store.top(TRACK, 10)] == ["ada"]
+
+    def test_equal_score_does_not_replace_the_entry(self, store: BoardStore) -> None:
+        first = submit(store, make_record("Ada", lap(12000), model="m1"), at(1)).entry
+        outcome = submit(store, make_record("Ada", lap(12000), model="m2"), at(2))
+        assert (outcome.duplicate, outcome.improved) == (False, False)
+        assert outcome.entry == first
+        assert store.get_entry(TRACK, "ada") == first
+        assert len(store.history("ada")) == 2
+
+    def test_qualifying_beats_any_completion_and_not_the_other_way(self, store: BoardStore) -> None:
+        unfinished = submit(store, make_record("Ada", [(9000, 80)]), at(1))
+        assert unfinished.improved and not unfinished.entry.score.qualified
+        finished = submit(store, make_record("Ada", lap(20000)), at(2))
+        assert finished.improved and finished.entry.score.qualified
+        assert not submit(store, make_record("Ada", [(9000, 99.9)]), at(3)).improved
+        assert store.get_entry(TRACK, "ada") == finished.entry
+
+    def test_higher_completion_improves_a_non_qualified_entry(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada", [(9000, 50)]), at(1))
+        better = submit(store, make_record("Ada", [(9000, 75.5)]), at(2))
+        assert better.improved
+        stored = store.get_entry(TRACK, "ada")
+        assert stored is not None and stored.score.best_completion_pct == 75.5
+
+    def test_each_racer_has_one_entry(self, store: BoardStore) -> None:
+        for n, (racer, ms) in enumerate([("Ada", 12000), ("Bob", 11000), ("Ada", 11500)]):
+            submit(store, make_record(racer, lap(ms)), at(n))
+        assert participants(store) == 2
+        assert [(e.racer_key, e.score.time_ms) for e in store.top(TRACK, 10)] == [
+            ("bob", 11000), ("ada", 11500)]
+
+    # ---- history ------------------------------------------------------------------------------
+
+    def test_history_is_oldest_first_across_boards_and_filtered_by_board(self, store: BoardStore) -> None:
+        cw = make_board("reInvent2019_track_cw", direction="cw", title="Smile Speedway (clockwise)")
+        pushes = [
+            (make_record("Ada", lap(12000)), make_board()),
+            (make_record("Ada", lap(14000), direction="cw"), cw),
+            (make_record("Ada", lap(12800)), make_board()),
+            (make_record("Bob", lap(11000)), make_board()),
+            (make_record("Ada", lap(13000), direction="cw"), cw),
+        ]
+        order = [3, 0, 4, 1, 2]  # push in a shuffled order, each at its own time
+        for n in order:
+            record, board = pushes[n]
+            submit(store, record, at(10 + n * 1.5), board)
+        ada = [pushes[n][0].submission_id for n in (0, 1, 2, 4)]
+        history = store.history("ada")
+        assert [s.submission_id for s in history] == ada
+        assert [s.submitted_at for s in history] == sorted(s.submitted_at for s in history)
+        assert [s.submission_id for s in store.history("ada", TRACK)] == [ada[0], ada[2]]
+        assert [s.submission_id for s in store.history("ada", "reInvent2019_track_cw")] == [
+            ada[1], ada[3]]
+        assert {s.board_id for s in history} == {TRACK, "reInvent2019_track_cw"}
+
+    def test_history_round_trips_the_submission(self, store: BoardStore) -> None:
+        record = make_record("Ada Lovelace", [(12000, 100), (8000, 55)])
+        submission, entry = write_for(record, make_board(), at(1))
+        store.create_board(make_board())
+        store.record_submission(submission, record, entry)
+        assert store.history("ada lovelace") == [submission]
+
+    def test_history_of_an_unknown_racer_is_empty(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada"), at(1))
+        assert store.history("nobody") == []
+        assert store.history("ada", "nowhere") == []
+
+    # ---- top ----------------------------------------------------------------------------------
+
+    def test_top_is_in_rank_key_order_with_a_limit(self, store: BoardStore) -> None:
+        times = {"Ada": 12000, "Bob": 11000, "Cy": 12000, "Dee": 10500, "Eve": 13000}
+        entries = [submit(store, make_record(racer, lap(ms)), at(n)).entry
+                   for n, (racer, ms) in enumerate(times.items())]
+        submit(store, make_record("Fay", [(9000, 90)]), at(9))
+        submit(store, make_record("Gus", [(9000, 95)]), at(10))
+        names = [e.racer for e in store.top(TRACK, 100)]
+        assert names == ["Dee", "Bob", "Ada", "Cy", "Eve", "Gus", "Fay"]
+        assert [e.racer for e in store.top(TRACK, 3)] == names[:3]
+        top = store.top(TRACK, 100)
+        assert [e.rank_key for e in top] == sorted(e.rank_key for e in top)
+        assert top[2] == entries[0]
+
+    def test_equal_scores_list_the_earlier_achievement_first(self, store: BoardStore) -> None:
+        submit(store, make_record("Zed", lap(12000)), at(1))
+        submit(store, make_record("Amy", lap(12000)), at(2))
+        assert [e.racer for e in store.top(TRACK, 10)] == ["Zed", "Amy"]
+
+    def test_top_pages_with_after_without_loss_or_repeat(self, store: BoardStore) -> None:
+        racers = [(f"Racer {n:02d}", 12000 + (n % 7) * 250) for n in range(25)]
+        random.Random(7).shuffle(racers)
+        for n, (racer, ms) in enumerate(racers):
+            submit(store, make_record(racer, lap(ms)), at(n))
+        everything = store.top(TRACK, 100)
+        assert len(everything) == 25
+        pages: list[list[Entry]] = []
+        after: str | None = None
+        while True:
+            page = store.top(TRACK, 10, after)
+            if not page:
+                break
+            pages.append(page)
+            after = page[-1].rank_key
+        assert [len(p) for p in pages] == [10, 10, 5]
+        assert [e for p in pages for e in p] == everything
+        assert store.top(TRACK, 10, everything[-1].rank_key) == []
+
+    def test_top_is_per_board(self, store: BoardStore) -> None:
+        cw = make_board("reInvent2019_track_cw", direction="cw")
+        submit(store, make_record("Ada", lap(12000)), at(1))
+        submit(store, make_record("Bob", lap(11000), direction="cw"), at(2), cw)
+        assert [e.racer for e in store.top(TRACK, 10)] == ["Ada"]
+        assert [e.racer for e in store.top("reInvent2019_track_cw", 10)] == ["Bob"]
+        assert store.top("nowhere", 10) == []
+
+    # ---- get_entry, count_better, get_record ------------------------------------------------
+
+    def test_get_entry_of_an_unknown_racer_is_none(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada"), at(1))
+        assert store.get_entry(TRACK, "bob") is None
+        assert store.get_entry("nowhere", "ada") is None
+
+    def test_count_better_counts_strictly_better_entries(self, store: BoardStore) -> None:
+        specs: Sequence[tuple[str, list[LapSpec]]] = [
+            ("Ada", lap(11000)), ("Bob", lap(12000)), ("Cy", lap(12000)), ("Dee", lap(13000)),
+            ("Eve", [(9000, 80)]), ("Fay", [(9000, 80)]), ("Gus", [(9000, 40)]),
+        ]
+        keys = {racer: submit(store, make_record(racer, laps), at(n)).entry.score_key
+                for n, (racer, laps) in enumerate(specs)}
+        ranks = {racer: store.count_better(TRACK, key) + 1 for racer, key in keys.items()}
+        assert ranks == {"Ada": 1, "Bob": 2, "Cy": 2, "Dee": 4, "Eve": 5, "Fay": 5, "Gus": 7}
+        # keys that no entry holds count the same way
+        assert store.count_better(TRACK, "0:" + "0" * 12) == 0
+        assert store.count_better(TRACK, keys["Bob"][:-1] + "1") == 3
+        assert store.count_better(TRACK, "1:10000") == 7  # everyone has more than 0 % completion
+        assert store.count_better("nowhere", keys["Dee"]) == 0
+
+    def test_get_record_round_trips_the_record(self, store: BoardStore) -> None:
+        record = make_record("Ada", runs=[[(12000, 100), (9000, 40)], [(11800, 100, "In progress")]],
+                             direction="ccw", model="fast-one")
+        submit(store, record, at(1))
+        stored = store.get_record(TRACK, record.submission_id)
+        assert stored == record
+        assert stored is not None and stored.submission_id == record.submission_id
+        assert store.get_record(TRACK, "0" * 64) is None
+        assert store.get_record("nowhere", record.submission_id) is None

@@ -1,0 +1,107 @@
+"""The SQLite store: the BoardStore contract, plus what only the embedded file does."""
+
+from __future__ import annotations
+
+import sqlite3
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from drboard_functions.stores.sqlite import SqliteStore
+
+from tests.contract.store_contract import TRACK, StoreContract, at, make_board, submit
+from tests.recordkit import make_record
+
+
+class TestSqliteContract(StoreContract):
+    @pytest.fixture
+    def store(self, tmp_path: Path) -> Iterator[SqliteStore]:
+        store = SqliteStore(tmp_path / "board.db")
+        yield store
+        store.close()
+
+
+def test_creates_the_file_in_a_folder_that_does_not_exist_yet(tmp_path: Path) -> None:
+    path = tmp_path / "not" / "yet" / "there" / "board.db"
+    store = SqliteStore(path)
+    try:
+        store.create_board(make_board())
+        assert path.is_file()
+    finally:
+        store.close()
+
+
+def test_data_persists_across_reopening_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "board.db"
+    record = make_record("Ada", [(12000, 100)])
+    first = SqliteStore(path)
+    outcome = submit(first, record, at(1))
+    first.close()
+
+    again = SqliteStore(path)
+    try:
+        stored = again.get_board(TRACK)
+        assert stored is not None and stored.participants == 1
+        assert again.get_entry(TRACK, "ada") == outcome.entry
+        assert again.get_record(TRACK, record.submission_id) == record
+        assert [s.submission_id for s in again.history("ada")] == [record.submission_id]
+        assert submit(again, record, at(2)).duplicate
+    finally:
+        again.close()
+
+
+def test_wal_mode_is_on(tmp_path: Path) -> None:
+    path = tmp_path / "board.db"
+    SqliteStore(path).close()
+    with sqlite3.connect(path) as db:
+        assert db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+
+
+def test_two_stores_on_one_file_see_each_others_writes(tmp_path: Path) -> None:
+    path = tmp_path / "board.db"
+    one, two = SqliteStore(path), SqliteStore(path)
+    try:
+        submit(one, make_record("Ada", [(12000, 100)]), at(1))
+        submit(two, make_record("Bob", [(11000, 100)]), at(2))
+        assert [e.racer for e in one.top(TRACK, 10)] == ["Bob", "Ada"]
+        stored = two.get_board(TRACK)
+        assert stored is not None and stored.participants == 2
+    finally:
+        one.close()
+        two.close()
+
+
+def _hold_a_write_transaction(path: Path, seconds: float) -> tuple[sqlite3.Connection, threading.Timer]:
+    """Another connection (another `drboard push`) in the middle of a write on ``path``."""
+    other = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+    other.execute("BEGIN IMMEDIATE")
+    other.execute("CREATE TABLE IF NOT EXISTS other_writer (x)")
+    timer = threading.Timer(seconds, other.execute, ("COMMIT",))
+    timer.start()
+    return other, timer
+
+
+def test_opening_waits_for_another_writer_on_an_existing_board(tmp_path: Path) -> None:
+    path = tmp_path / "board.db"
+    SqliteStore(path).close()
+    other, timer = _hold_a_write_transaction(path, 0.3)
+    try:
+        store = SqliteStore(path)
+        store.create_board(make_board())
+        store.close()
+    finally:
+        timer.join()
+        other.close()
+
+
+def test_opening_a_new_file_waits_for_another_writer(tmp_path: Path) -> None:
+    path = tmp_path / "board.db"
+    other, timer = _hold_a_write_transaction(path, 0.3)
+    try:
+        store = SqliteStore(path)
+        store.create_board(make_board())
+        store.close()
+    finally:
+        timer.join()
+        other.close()
