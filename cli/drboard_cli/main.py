@@ -218,7 +218,7 @@ def _emit(page: Any, fmt: str, output: Path | None) -> None:
             with output.open("w", encoding="utf-8") as handle:
                 render.plain_console(handle).print(render.board_table(page))
         elif page.entries:
-            out.print(render.board_table(page))
+            out.print(render.board_table(page, out.width))
         else:
             out.print(f"{page.board.title}: no entries yet.")
         return

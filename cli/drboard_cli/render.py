@@ -53,8 +53,10 @@ def _time_label(entry: EntryView) -> str:
 # ---- boards ----------------------------------------------------------------------------------
 
 
-def board_table(page: BoardPage) -> Table:
+def board_table(page: BoardPage, width: int = 120) -> Table:
+    """The standings; on a narrow terminal the submission time and model name give way."""
     board = page.board
+    wide = width >= 110
     table = Table(
         title=f"{board.title} · {board.board_id}",
         caption=f"{board.participants} racers · {method_label(board)}",
@@ -62,19 +64,23 @@ def board_table(page: BoardPage) -> Table:
     )
     table.add_column("Rank", justify="right")
     table.add_column("Racer", overflow="fold")
-    table.add_column("Model", overflow="ellipsis", max_width=24)
+    if wide:
+        table.add_column("Model", overflow="ellipsis", max_width=24)
     table.add_column("Time", justify="right", no_wrap=True)
     table.add_column("Gap", justify="right", no_wrap=True)
     table.add_column("Laps", justify="right")
     table.add_column("Design")
-    table.add_column("Submitted", no_wrap=True)
+    if wide:
+        table.add_column("Submitted", no_wrap=True)
     for entry in page.entries:
-        style = None if entry.qualified else "dim"
-        table.add_row(
-            str(entry.rank), entry.racer, entry.model_name, _time_label(entry), gap(entry.gap_ms),
-            str(entry.laps_completed), design_summary(entry.design),
-            entry.submitted_at.strftime("%b %d %H:%M"), style=style,
-        )
+        cells = [str(entry.rank), entry.racer]
+        if wide:
+            cells.append(entry.model_name)
+        cells += [_time_label(entry), gap(entry.gap_ms), str(entry.laps_completed),
+                  design_summary(entry.design)]
+        if wide:
+            cells.append(entry.submitted_at.strftime("%b %d %H:%M"))
+        table.add_row(*cells, style=None if entry.qualified else "dim")
     return table
 
 

@@ -31,7 +31,7 @@ from .models import (
     RacerView,
     Submission,
 )
-from .stores.base import BoardStore, StoredBoard
+from .stores.base import BoardStore, RecordArchive, StoredBoard
 
 Clock = Callable[[], datetime]
 MAX_CURSOR_CHARS = 1024
@@ -99,9 +99,11 @@ def _default_board(record: Record, now: datetime) -> Board:
 
 
 class LeaderboardService:
-    def __init__(self, store: BoardStore, clock: Clock = utc_now) -> None:
+    def __init__(self, store: BoardStore, clock: Clock = utc_now,
+                 archive: RecordArchive | None = None) -> None:
         self.store = store
         self.clock = clock
+        self.archive = archive
 
     # ---- push -----------------------------------------------------------------------------
 
@@ -127,6 +129,8 @@ class LeaderboardService:
         best = outcome.entry
         if outcome.duplicate:
             submission = self._stored_submission(submission)
+        elif self.archive is not None:
+            self.archive.put(board.board_id, record)
         rank = self.store.count_better(board.board_id, best.score_key) + 1
         participants = self._require_board(board.board_id).participants
         return PushReceipt(

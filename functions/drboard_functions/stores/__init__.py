@@ -1,5 +1,5 @@
 """Storage adapters behind the service's BoardStore port."""
 
-from .base import BoardStore, StoredBoard
+from .base import BoardStore, RecordArchive, StoredBoard
 
-__all__ = ["BoardStore", "StoredBoard"]
+__all__ = ["BoardStore", "RecordArchive", "StoredBoard"]

@@ -44,3 +44,8 @@ class BoardStore(Protocol):
 
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         """The full record of one submission."""
+
+
+class RecordArchive(Protocol):
+    def put(self, board_id: str, record: Record) -> None:
+        """Keep the raw record of an accepted submission (S3 in the cloud)."""
