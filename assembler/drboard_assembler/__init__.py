@@ -1,11 +1,21 @@
-"""drboard's assembler: a DeepRacer run folder -> one validated Record. No AWS, no network."""
+"""drboard's assembler: a DeepRacer run folder -> one validated Record. No AWS, no network.
 
-__version__ = "0.1.0"
+The Record schema and the track catalog import lightly; the file readers (YAML, archives) load
+on first use, so the Lambda functions, which only validate records, never import them.
+"""
 
-from .assemble import Overrides, assemble
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 from .catalog import TrackCatalog, UnknownTrackError, default_catalog
 from .errors import AssemblyError
 from .record import Record
+
+if TYPE_CHECKING:
+    from .assembly import Overrides, assemble
+
+__version__ = "0.1.0"
 
 __all__ = [
     "AssemblyError",
@@ -17,3 +27,11 @@ __all__ = [
     "assemble",
     "default_catalog",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in ("Overrides", "assemble"):
+        from . import assembly
+
+        return getattr(assembly, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

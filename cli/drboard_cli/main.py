@@ -5,6 +5,7 @@ Exit codes: 0 success, 2 bad input (a file, a flag, a record the board refuses),
 
 from __future__ import annotations
 
+import signal
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -33,14 +34,24 @@ err = Console(stderr=True, highlight=False)
 
 
 class Context:
-    def __init__(self, db: Path | None) -> None:
+    """Which board the commands talk to: ``--endpoint`` (or DRBOARD_ENDPOINT), else ``--db``,
+    else the endpoint saved by ``drboard configure``, else the embedded board."""
+
+    def __init__(self, db: Path | None, endpoint: str | None) -> None:
+        self.explicit_db = db
         self.db = db or config.default_db_path()
+        self.endpoint = endpoint or (None if db else config.load_settings().get("endpoint"))
         self._board: BoardClient | None = None
 
     @property
     def board(self) -> BoardClient:
         if self._board is None:
-            self._board = local_board(self.db)
+            if self.endpoint:
+                from .remote import HttpBoard
+
+                self._board = HttpBoard(str(self.endpoint))
+            else:
+                self._board = local_board(self.db)
         return self._board
 
 
@@ -78,13 +89,16 @@ def _escape(text: str) -> str:
 @click.option("--db", type=click.Path(dir_okay=False, path_type=Path), envvar="DRBOARD_DB",
               help="The embedded board's SQLite file (default: in your user data folder). "
                    "Env: DRBOARD_DB.")
+@click.option("--endpoint", envvar="DRBOARD_ENDPOINT", metavar="URL",
+              help="A deployed board's API URL, or a `drboard serve` on your network. "
+                   "Env: DRBOARD_ENDPOINT. Default: the one `drboard configure` saved, if any.")
 @click.pass_context
-def cli(ctx: click.Context, db: Path | None) -> None:
+def cli(ctx: click.Context, db: Path | None, endpoint: str | None) -> None:
     """drboard: a leaderboard for AWS DeepRacer racers.
 
     Push your run folders, see the standings and how the fast models were built.
     """
-    ctx.obj = Context(db)
+    ctx.obj = Context(db, endpoint)
 
 
 # ---- assemble ----------------------------------------------------------------------------
@@ -295,6 +309,105 @@ def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: st
             click.echo(view.model_dump_json(indent=2))
         else:
             out.print(render.racer_panel(view))
+
+
+# ---- targets: configure and serve -------------------------------------------------------
+
+
+@cli.command()
+@click.option("--stack-name", help="Read the board's URL from this CloudFormation stack's outputs.")
+@click.option("--region", help="The stack's AWS region (default: your AWS configuration's).")
+@click.option("--endpoint", "endpoint_url", metavar="URL",
+              help="Use this board URL (a deployed API or a `drboard serve`).")
+@click.option("--local", "use_local", is_flag=True, help="Forget the saved URL: use the embedded board.")
+@click.option("--racer", help="Your racer alias, the default for `drboard history`.")
+def configure(stack_name: str | None, region: str | None, endpoint_url: str | None,
+              use_local: bool, racer: str | None) -> None:
+    """Choose the board the commands talk to, and save it in your user config folder.
+
+    With no option, shows what is saved.
+    """
+    with edge():
+        if sum(map(bool, (stack_name, endpoint_url, use_local))) > 1:
+            raise click.UsageError("give one of --stack-name, --endpoint or --local")
+        changes: dict[str, Any] = {}
+        if stack_name:
+            from .cloud import stack_endpoint
+
+            changes |= {"endpoint": stack_endpoint(stack_name, region), "stack_name": stack_name}
+        elif endpoint_url:
+            if not endpoint_url.startswith(("http://", "https://")):
+                raise click.UsageError("--endpoint must be an http:// or https:// URL")
+            changes |= {"endpoint": endpoint_url.rstrip("/"), "stack_name": None}
+        elif use_local:
+            changes |= {"endpoint": None, "stack_name": None}
+        if racer:
+            changes["racer"] = racer
+        if changes:
+            config.save_settings(**changes)
+        settings = config.load_settings()
+        target = settings.get("endpoint") or f"the embedded board ({config.default_db_path()})"
+        out.print(f"Board: {target}", soft_wrap=True)
+        if settings.get("stack_name"):
+            out.print(f"Stack: {settings['stack_name']}")
+        if settings.get("racer"):
+            out.print(f"Racer: {settings['racer']}")
+        out.print(f"Saved in {config.settings_path()}", style="dim", soft_wrap=True)
+
+
+@cli.command()
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="The address to listen on; 0.0.0.0 lets racers on your network push.")
+@click.option("--port", type=click.IntRange(0, 65535), default=8000, show_default=True)
+@click.option("--table", help="Serve a DynamoDB table instead of the embedded board.")
+@click.option("--endpoint-url", metavar="URL",
+              help="With --table: the DynamoDB endpoint, e.g. DynamoDB Local's http://127.0.0.1:8001.")
+@pass_context
+def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: str | None) -> None:
+    """Host the board over HTTP with the cloud board's own API, e.g. on an event laptop.
+
+    Racers push to it with `--endpoint http://HOST:PORT`. Ctrl-C stops it; every push that was
+    answered is saved.
+    """
+    from drboard_functions.service import LeaderboardService
+
+    from .serve import BoardServer
+
+    with edge():
+        if endpoint_url and not table:
+            raise click.UsageError("--endpoint-url goes with --table")
+        if table:
+            import boto3
+            from drboard_functions.stores.dynamodb import DynamoDbStore
+
+            client = boto3.client("dynamodb", endpoint_url=endpoint_url)
+            service = LeaderboardService(DynamoDbStore(table, client=client))
+            where = f"DynamoDB table {table}" + (f" at {endpoint_url}" if endpoint_url else "")
+        else:
+            service = LeaderboardService(local_board_store(ctx.db))
+            where = str(ctx.db)
+        server = BoardServer((host, port), service)
+        bound_host, bound_port = str(server.server_address[0]), int(server.server_address[1])
+        out.print(f"Serving {where} on http://{bound_host}:{bound_port}  (Ctrl-C to stop)",
+                  soft_wrap=True)
+        out.file.flush()
+        signal.signal(signal.SIGTERM, _interrupt)
+        try:
+            server.serve_forever()
+        except KeyboardInterrupt:
+            out.print("Stopping…")
+        finally:
+            server.server_close()
+
+
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def local_board_store(db: Path) -> Any:
+    from drboard_functions.stores.sqlite import SqliteStore
+
+    return SqliteStore(db)
 
 
 def main() -> None:  # pragma: no cover

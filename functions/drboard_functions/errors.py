@@ -42,3 +42,11 @@ class TooSoon(DomainError):
     def __init__(self, message: str, retry_after_s: int) -> None:
         super().__init__(message)
         self.retry_after_s = retry_after_s
+
+
+class NotAuthorized(DomainError):
+    """The board refused the caller (HTTP 401/403): unsigned, or not allowed."""
+
+
+class BoardUnreachable(DomainError):
+    """The board could not be reached or answered with something unexpected."""

@@ -1,5 +1,6 @@
 """A non-editable install must put only the drboard_* packages into site-packages."""
 
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -13,11 +14,14 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> zipfile.ZipFile:
     out = tmp_path_factory.mktemp("wheel")
-    build = tmp_path_factory.mktemp("build")
+    # Build from a copy without local build products, as from a clean checkout.
+    source = tmp_path_factory.mktemp("checkout") / "drboard"
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        ".git", ".venv", "node_modules", "build", ".aws-sam", "*.egg-info", "__pycache__"))
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-         "-w", str(out), str(ROOT)],
-        check=True, cwd=build,
+         "-w", str(out), str(source)],
+        check=True, cwd=out,
     )
     (path,) = out.glob("drboard-*.whl")
     return zipfile.ZipFile(path)

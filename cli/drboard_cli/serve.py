@@ -1,0 +1,130 @@
+"""`drboard serve`: the Lambda functions' own resolvers behind a small HTTP server.
+
+Each HTTP request becomes an API Gateway HTTP API (v2) event for the same routes the cloud board
+runs, so an event laptop hosts exactly the board that `sam deploy` would.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import uuid
+from dataclasses import dataclass
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any
+from urllib.parse import parse_qsl, urlsplit
+
+from drboard_functions.service import LeaderboardService
+from rich.console import Console
+
+MAX_BODY_BYTES = 1024 * 1024  # the routes apply the record's own, smaller bound
+
+_log = Console(stderr=True, highlight=False)
+
+
+@dataclass
+class LocalContext:
+    """What the resolvers read of a Lambda context."""
+
+    function_name: str = "drboard-serve"
+    memory_limit_in_mb: int = 512
+    invoked_function_arn: str = "arn:aws:lambda:local:000000000000:function:drboard-serve"
+    aws_request_id: str = ""
+
+
+def http_event(method: str, target: str, headers: dict[str, str], body: bytes,
+               client_ip: str) -> dict[str, Any]:
+    parts = urlsplit(target)
+    now = time.time()
+    return {
+        "version": "2.0",
+        "routeKey": "$default",
+        "rawPath": parts.path or "/",
+        "rawQueryString": parts.query,
+        "headers": {name.lower(): value for name, value in headers.items()},
+        "queryStringParameters": dict(parse_qsl(parts.query)) or None,
+        "requestContext": {
+            "accountId": "000000000000",
+            "apiId": "local",
+            "domainName": headers.get("Host", "localhost"),
+            "http": {"method": method, "path": parts.path or "/", "protocol": "HTTP/1.1",
+                     "sourceIp": client_ip, "userAgent": headers.get("User-Agent", "")},
+            "requestId": str(uuid.uuid4()),
+            "routeKey": "$default",
+            "stage": "$default",
+            "time": time.strftime("%d/%b/%Y:%H:%M:%S +0000", time.gmtime(now)),
+            "timeEpoch": int(now * 1000),
+        },
+        "body": body.decode("utf-8", errors="replace") if body else None,
+        "isBase64Encoded": False,
+    }
+
+
+class BoardServer(ThreadingHTTPServer):
+    daemon_threads = False  # on shutdown, let requests in flight finish: nothing is lost
+    block_on_close = True
+
+    def __init__(self, address: tuple[str, int], service: LeaderboardService) -> None:
+        from drboard_functions.routes import build_app, pull_router, push_router
+
+        super().__init__(address, _Handler)
+        self.service = service
+        self.app = build_app(push_router, pull_router)
+        # One request at a time through the resolvers: they keep per-request context, and the
+        # embedded SQLite board has a single connection.
+        self.lock = threading.Lock()
+
+    def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
+        with self.lock:
+            self.app.append_context(service=self.service)
+            context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
+            return self.app.resolve(event, context)  # type: ignore[arg-type]
+
+
+class _Handler(BaseHTTPRequestHandler):
+    server: BoardServer
+    protocol_version = "HTTP/1.1"
+
+    def do_GET(self) -> None:
+        self._dispatch()
+
+    def do_POST(self) -> None:
+        self._dispatch()
+
+    def do_OPTIONS(self) -> None:
+        self._dispatch()
+
+    def _dispatch(self) -> None:
+        length = int(self.headers.get("Content-Length") or 0)
+        if length > MAX_BODY_BYTES:
+            self._reply(413, {"content-type": "application/json"},
+                        json.dumps({"message": "the request body is too large"}).encode())
+            self.close_connection = True
+            return
+        body = self.rfile.read(length) if length else b""
+        event = http_event(self.command, self.path, dict(self.headers.items()), body,
+                           self.client_address[0])
+        result = self.server.handle_event(event)
+        payload = result.get("body") or ""
+        data = payload.encode("utf-8") if isinstance(payload, str) else bytes(payload)
+        if result.get("isBase64Encoded"):
+            import base64
+
+            data = base64.b64decode(data)
+        headers = dict(result.get("headers") or {})
+        for name, values in (result.get("multiValueHeaders") or {}).items():
+            headers[name] = ", ".join(values)
+        self._reply(int(result.get("statusCode", 200)), headers, data)
+
+    def _reply(self, status: int, headers: dict[str, str], data: bytes) -> None:
+        self.send_response(status)
+        for name, value in headers.items():
+            if name.lower() not in ("content-length", "connection"):
+                self.send_header(name, str(value))
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        self.wfile.write(data)
+
+    def log_message(self, format: str, *args: Any) -> None:
+        _log.print(f"{self.client_address[0]} {format % args}", style="dim", markup=False)
