@@ -1,0 +1,43 @@
+"""POST /boards/{board}/submissions: the push function (IAM-authorised in the cloud)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from aws_lambda_powertools import Logger, Metrics, Tracer
+from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, Response
+from aws_lambda_powertools.event_handler.middlewares import NextMiddleware
+from aws_lambda_powertools.logging import correlation_paths
+from aws_lambda_powertools.metrics import MetricUnit
+from aws_lambda_powertools.utilities.typing import LambdaContext
+
+from ..routes import build_app, push_router
+from . import wiring
+
+logger = Logger()
+tracer = Tracer()
+metrics = Metrics()
+
+SUBMISSION_METRICS = {201: "SubmissionAccepted", 200: "DuplicateSubmission"}
+
+
+def count_submissions(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
+    """Count accepted and duplicate submissions (refusals answer through the error handlers)."""
+    response = next_middleware(app)
+    name = SUBMISSION_METRICS.get(response.status_code)
+    if name:
+        metrics.add_metric(name=name, unit=MetricUnit.Count, value=1)
+        logger.info(name, extra={"board": app.context.get("_route_args", {}).get("board")})
+    return response
+
+
+app = build_app(push_router)
+app.use(middlewares=[count_submissions])
+
+
+@logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
+@metrics.log_metrics(capture_cold_start_metric=True)
+@tracer.capture_lambda_handler
+def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
+    app.append_context(service=wiring.service_from_environment())
+    return app.resolve(event, context)

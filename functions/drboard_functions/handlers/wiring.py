@@ -1,0 +1,27 @@
+"""Where the Lambda functions get their service: the only code that reads the environment.
+
+``TABLE_NAME`` names the DynamoDB table (required); ``ARCHIVE_BUCKET`` names the S3 bucket that
+keeps every accepted record (optional: the pull function has none). The service and its AWS
+clients are built once per container and reused by every invocation.
+"""
+
+from __future__ import annotations
+
+import os
+from functools import cache
+
+from ..service import LeaderboardService
+from ..stores.s3_archive import S3Archive
+
+
+@cache
+def service_from_environment() -> LeaderboardService:
+    # Imported here so that importing a handler does not need boto3's DynamoDB layer (and tests
+    # can swap this function for an SQLite-backed service).
+    from ..stores.dynamodb import DynamoDbStore
+
+    bucket = os.environ.get("ARCHIVE_BUCKET")
+    return LeaderboardService(
+        DynamoDbStore(os.environ["TABLE_NAME"]),
+        archive=S3Archive(bucket) if bucket else None,
+    )

@@ -1,0 +1,150 @@
+"""The DynamoDB store: the BoardStore contract on moto and on Amazon's DynamoDB Local, plus what
+only the real engine shows: concurrent pushes of one racer, and a top N that reads N items."""
+
+from __future__ import annotations
+
+import random
+import threading
+import uuid
+from collections.abc import Iterator
+from typing import Any
+
+import boto3
+import pytest
+from drboard_functions.service import LeaderboardService
+from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
+from moto import mock_aws
+
+from tests.contract.store_contract import TRACK, StoreContract, at, make_board, write_for
+from tests.integration.dynamodb_local import REGION, DynamoDbLocal
+from tests.recordkit import make_record
+from tests.tablekit import create_board_table, table_definition
+
+
+def new_table(client: Any) -> str:
+    return create_board_table(client, f"drboard-test-{uuid.uuid4().hex[:12]}")
+
+
+@pytest.fixture
+def local_table(dynamodb_local: DynamoDbLocal) -> Iterator[str]:
+    """A fresh, empty board table on the session's DynamoDB Local."""
+    client = dynamodb_local.client()
+    name = new_table(client)
+    yield name
+    client.delete_table(TableName=name)
+
+
+class TestMotoContract(StoreContract):
+    @pytest.fixture
+    def store(self) -> Iterator[DynamoDbStore]:
+        with mock_aws():
+            client = boto3.client("dynamodb", region_name=REGION)
+            yield DynamoDbStore(new_table(client), client)
+
+
+class TestDynamoDbLocalContract(StoreContract):
+    @pytest.fixture
+    def store(self, dynamodb_local: DynamoDbLocal, local_table: str) -> DynamoDbStore:
+        return DynamoDbStore(local_table, dynamodb_local.client())
+
+
+def test_the_table_is_the_templates_board_table(dynamodb_local: DynamoDbLocal, local_table: str) -> None:
+    table = dynamodb_local.client().describe_table(TableName=local_table)["Table"]
+    definition = table_definition()
+    assert table["KeySchema"] == definition["KeySchema"]
+    assert {i["IndexName"] for i in table["LocalSecondaryIndexes"]} == {"by_rank"}
+    assert {i["IndexName"] for i in table["GlobalSecondaryIndexes"]} == {"by_racer", "boards"}
+
+
+# ---- concurrent pushes ----------------------------------------------------------------------
+
+PUSHERS = 20
+SHARED = "Shared Racer"
+
+
+def test_concurrent_pushes_of_one_racer_lose_nothing(dynamodb_local: DynamoDbLocal,
+                                                     local_table: str) -> None:
+    times = [20_000 - n * 37 for n in range(PUSHERS)]
+    random.Random(3).shuffle(times)  # the best is pushed somewhere in the middle
+    records = [make_record(SHARED, [(ms, 100)], model=f"m{n}") for n, ms in enumerate(times)]
+    # Each thread has its own client, as separate Lambda invocations would; built beforehand.
+    services = [LeaderboardService(DynamoDbStore(local_table, dynamodb_local.client()))
+                for _ in range(PUSHERS)]
+    barrier = threading.Barrier(PUSHERS)
+    errors: list[BaseException] = []
+    statuses: list[str] = []
+
+    def push(n: int) -> None:
+        try:
+            barrier.wait(timeout=30)
+            statuses.append(services[n].push(records[n]).status)
+        except BaseException as error:
+            errors.append(error)
+
+    threads = [threading.Thread(target=push, args=(n,)) for n in range(PUSHERS)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=120)
+    assert errors == []
+    assert statuses == ["created"] * PUSHERS
+
+    service = services[0]
+    history = service.history(SHARED, TRACK)
+    assert sorted(h.submission_id for h in history) == sorted(r.submission_id for r in records)
+    best = records[times.index(min(times))]
+    view = service.racer(TRACK, SHARED)
+    assert (view.entry.time_ms, view.entry.submission_id) == (min(times), best.submission_id)
+    assert [h.submission_id for h in history if h.is_best] == [best.submission_id]
+    assert view.board.participants == 1
+    assert [e.racer for e in service.board_page(TRACK).entries] == [SHARED]
+
+
+# ---- the top N reads N items ------------------------------------------------------------------
+
+BIG_BOARD = 1_000
+
+
+def seed_board(client: Any, table: str, racers: int) -> None:
+    """A board of ``racers`` entries, written directly (BatchWriteItem, 25 items a call)."""
+    board = make_board()
+    rng = random.Random(11)
+    items = [board_item(board) | {"participants": {"N": str(racers)}}]
+    for n in range(racers):
+        record = make_record(f"Racer {n:04d}", [(rng.randrange(8_000, 30_000), 100)])
+        items.append(entry_item(write_for(record, board, at(n))[1]))
+    for start in range(0, len(items), 25):
+        requests = [{"PutRequest": {"Item": item}} for item in items[start:start + 25]]
+        while requests:
+            response = client.batch_write_item(RequestItems={table: requests})
+            requests = response.get("UnprocessedItems", {}).get(table, [])
+
+
+def test_top_of_a_big_board_reads_about_limit_items(dynamodb_local: DynamoDbLocal,
+                                                    local_table: str) -> None:
+    client = dynamodb_local.client()
+    seed_board(client, local_table, BIG_BOARD)
+    scanned: list[int] = []
+
+    def count_scanned(parsed: dict[str, Any], **_: Any) -> None:
+        scanned.append(parsed["ScannedCount"])
+
+    client.meta.events.register("after-call.dynamodb.Query", count_scanned)
+    store = DynamoDbStore(local_table, client)
+
+    top = store.top(TRACK, 10)
+    assert len(top) == 10
+    assert scanned == [10]  # one Query, ten items read of the board's 1,000
+
+    everything = store.top(TRACK, BIG_BOARD)
+    assert [e.rank_key for e in everything] == sorted(e.rank_key for e in everything)
+    assert everything[:10] == top and len(everything) == BIG_BOARD
+
+    scanned.clear()
+    page = LeaderboardService(store).board_page(TRACK, limit=10, cursor=None)
+    assert len(page.entries) == 10 and page.board.participants == BIG_BOARD
+    assert sum(scanned) <= 11
+    scanned.clear()
+    following = LeaderboardService(store).board_page(TRACK, limit=10, cursor=page.next_cursor)
+    assert [e.racer for e in following.entries] == [e.racer for e in everything[10:20]]
+    assert sum(scanned) <= 11 + 1  # the page's ten, and the leader (for gaps) on a later page

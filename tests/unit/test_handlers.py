@@ -1,0 +1,189 @@
+"""The Lambda handlers with the example events in events/, as `sam local invoke -e` would send them.
+
+The wiring is swapped for an SQLite-backed service; one test runs the real wiring (DynamoDB and
+S3) on moto when the DynamoDB store is there.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+# Before the handlers are imported: Powertools reads these when it builds its Tracer and Metrics.
+os.environ.setdefault("POWERTOOLS_SERVICE_NAME", "drboard")
+os.environ.setdefault("POWERTOOLS_METRICS_NAMESPACE", "drboard")
+os.environ.setdefault("POWERTOOLS_TRACE_DISABLED", "true")
+
+import boto3
+from drboard_assembler.record import Record
+from drboard_functions.handlers import pull, push, wiring
+from drboard_functions.service import LeaderboardService
+from drboard_functions.stores.s3_archive import S3Archive
+from drboard_functions.stores.sqlite import SqliteStore
+from moto import mock_aws
+
+EVENTS = Path(__file__).parents[2] / "events"
+PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_racer.json",
+               "pull_view.json"]
+REGION = "eu-west-1"
+
+pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
+
+
+@dataclass
+class FakeLambdaContext:
+    function_name: str = "drboard-PullFunction-test"
+    memory_limit_in_mb: int = 512
+    invoked_function_arn: str = "arn:aws:lambda:eu-west-1:123456789012:function:drboard-test"
+    aws_request_id: str = "52fdfc07-2182-454f-963f-5f0f9a621d72"
+
+
+def load(name: str) -> dict[str, Any]:
+    return json.loads((EVENTS / name).read_text())  # type: ignore[no-any-return]
+
+
+def event_record() -> Record:
+    return Record.model_validate_json(load("push.json")["body"])
+
+
+@pytest.fixture
+def service(monkeypatch: pytest.MonkeyPatch) -> Iterator[LeaderboardService]:
+    store = SqliteStore(":memory:")
+    service = LeaderboardService(store)
+    monkeypatch.setattr(wiring, "service_from_environment", lambda: service)
+    yield service
+    store.close()
+
+
+def test_the_events_are_api_gateway_http_api_v2_events() -> None:
+    for path in sorted(EVENTS.glob("*.json")):
+        event = load(path.name)
+        method, route = event["routeKey"].split(" ", 1)
+        assert event["version"] == "2.0", path.name
+        assert event["requestContext"]["http"]["method"] == method
+        assert event["requestContext"]["http"]["path"] == event["rawPath"]
+        for name, value in (event.get("pathParameters") or {}).items():
+            assert "{" + name + "}" in route and value in event["rawPath"]
+    assert "iam" in load("push.json")["requestContext"]["authorizer"]
+
+
+def test_push_stores_the_event_record_then_sees_the_duplicate(
+        service: LeaderboardService, capsys: pytest.CaptureFixture[str]) -> None:
+    first = push.lambda_handler(load("push.json"), FakeLambdaContext())
+    assert first["statusCode"] == 201, first["body"]
+    receipt = json.loads(first["body"])
+    assert (receipt["status"], receipt["rank"]) == ("created", 1)
+    assert receipt["submission_id"] == event_record().submission_id
+    assert "SubmissionAccepted" in capsys.readouterr().out  # the metric, as EMF on stdout
+
+    again = push.lambda_handler(load("push.json"), FakeLambdaContext())
+    assert again["statusCode"] == 200
+    assert json.loads(again["body"])["status"] == "duplicate"
+    assert "DuplicateSubmission" in capsys.readouterr().out
+
+
+def test_push_refuses_a_tampered_event_body(service: LeaderboardService) -> None:
+    event = load("push.json")
+    record = json.loads(event["body"])
+    record["evaluations"][0]["laps"][0]["time_ms"] += 1
+    event["body"] = json.dumps(record)
+    response = push.lambda_handler(event, FakeLambdaContext())
+    assert response["statusCode"] == 422
+    assert service.boards() == []
+
+
+@pytest.mark.parametrize("name", PULL_EVENTS)
+def test_every_pull_event_is_answered(service: LeaderboardService, name: str) -> None:
+    service.push(event_record())
+    response = pull.lambda_handler(load(name), FakeLambdaContext())
+    assert response["statusCode"] == 200, response["body"]
+
+
+def test_pull_events_answer_what_each_route_promises(service: LeaderboardService) -> None:
+    record = event_record()
+    service.push(record)
+    context = FakeLambdaContext()
+
+    boards = json.loads(pull.lambda_handler(load("pull_boards.json"), context)["body"])
+    assert [b["board_id"] for b in boards["boards"]] == [record.track]
+
+    board = pull.lambda_handler(load("pull_board.json"), context)
+    assert board["headers"]["Access-Control-Allow-Origin"] == "*"  # the event comes from a browser
+    assert [e["racer"] for e in json.loads(board["body"])["entries"]] == [record.racer]
+
+    racer = json.loads(pull.lambda_handler(load("pull_racer.json"), context)["body"])
+    assert racer["record"]["submission_id"] == record.submission_id
+
+    view = pull.lambda_handler(load("pull_view.json"), context)
+    assert view["headers"]["Content-Type"].startswith("text/html")
+    assert record.racer in view["body"]
+
+    index = pull.lambda_handler(load("pull_index.json"), context)
+    assert "Smile Speedway" in index["body"]
+
+
+def test_the_pull_function_does_not_take_submissions(service: LeaderboardService) -> None:
+    response = pull.lambda_handler(load("push.json"), FakeLambdaContext())
+    assert response["statusCode"] == 404
+    assert service.boards() == []
+
+
+# ---- the cloud wiring, on moto -----------------------------------------------------------------
+
+
+@pytest.fixture
+def aws(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    monkeypatch.setenv("AWS_DEFAULT_REGION", REGION)
+    monkeypatch.setenv("AWS_ACCESS_KEY_ID", "testing")
+    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", "testing")
+    monkeypatch.delenv("AWS_PROFILE", raising=False)
+    with mock_aws():
+        yield
+
+
+def test_the_archive_writes_the_record_as_json(aws: None) -> None:
+    s3 = boto3.client("s3", region_name=REGION)
+    s3.create_bucket(Bucket="archive", CreateBucketConfiguration={"LocationConstraint": REGION})
+    record = event_record()
+    S3Archive("archive", client=s3).put("reInvent2019_track", record)
+    key = f"records/reInvent2019_track/{record.submission_id}.json"
+    stored = s3.get_object(Bucket="archive", Key=key)
+    assert stored["ContentType"] == "application/json"
+    assert Record.model_validate_json(stored["Body"].read()) == record
+
+
+def test_the_archive_keeps_a_board_id_inside_its_prefix() -> None:
+    assert S3Archive.key("../x/y", "abc") == "records/..%2Fx%2Fy/abc.json"
+
+
+def test_the_handlers_run_on_dynamodb_and_s3(aws: None, monkeypatch: pytest.MonkeyPatch) -> None:
+    pytest.importorskip("drboard_functions.stores.dynamodb")
+    tablekit = pytest.importorskip("tests.tablekit")
+    dynamodb = boto3.client("dynamodb", region_name=REGION)
+    s3 = boto3.client("s3", region_name=REGION)
+    tablekit.create_board_table(dynamodb, "boards")
+    s3.create_bucket(Bucket="archive", CreateBucketConfiguration={"LocationConstraint": REGION})
+    monkeypatch.setenv("TABLE_NAME", "boards")
+    monkeypatch.setenv("ARCHIVE_BUCKET", "archive")
+    wiring.service_from_environment.cache_clear()
+    try:
+        assert wiring.service_from_environment() is wiring.service_from_environment()
+        created = push.lambda_handler(load("push.json"), FakeLambdaContext())
+        assert created["statusCode"] == 201, created["body"]
+        assert push.lambda_handler(load("push.json"), FakeLambdaContext())["statusCode"] == 200
+
+        record = event_record()
+        key = f"records/{record.track}/{record.submission_id}.json"
+        assert s3.head_object(Bucket="archive", Key=key)["ContentType"] == "application/json"
+
+        page = pull.lambda_handler(load("pull_board.json"), FakeLambdaContext())
+        assert page["statusCode"] == 200
+        assert [e["racer"] for e in json.loads(page["body"])["entries"]] == [record.racer]
+    finally:
+        wiring.service_from_environment.cache_clear()

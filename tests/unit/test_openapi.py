@@ -1,0 +1,68 @@
+"""The committed OpenAPI document (functions/openapi.json) is the one the routes generate."""
+
+from __future__ import annotations
+
+import json
+from importlib.metadata import version
+from pathlib import Path
+from typing import Any
+
+import pytest
+from drboard_functions.routes import openapi_document
+
+COMMITTED = Path(__file__).parents[2] / "functions" / "openapi.json"
+REGENERATE = "python -m drboard_functions.routes > functions/openapi.json"
+
+
+@pytest.fixture(scope="module")
+def document() -> dict[str, Any]:
+    return json.loads(openapi_document())  # type: ignore[no-any-return]
+
+
+def test_the_committed_document_matches_the_code() -> None:
+    assert COMMITTED.is_file(), f"functions/openapi.json is missing: run `{REGENERATE}`"
+    assert COMMITTED.read_text(encoding="utf-8") == openapi_document(), (
+        f"functions/openapi.json is out of date with the routes: run `{REGENERATE}` and commit it")
+
+
+def test_it_names_the_api_and_its_version(document: dict[str, Any]) -> None:
+    assert document["openapi"].startswith("3.")
+    assert document["info"]["title"] == "drboard"
+    assert document["info"]["version"] == version("drboard")
+
+
+def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
+    routes = {(method.upper(), path) for path, item in document["paths"].items() for method in item}
+    assert routes == {
+        ("POST", "/boards/{board}/submissions"),
+        ("GET", "/"),
+        ("GET", "/boards"),
+        ("GET", "/boards/{board}"),
+        ("GET", "/boards/{board}/racers/{racer}"),
+        ("GET", "/boards/{board}/view"),
+    }
+
+
+def test_the_push_body_is_a_record_and_its_answers_are_listed(document: dict[str, Any]) -> None:
+    push = document["paths"]["/boards/{board}/submissions"]["post"]
+    schema = push["requestBody"]["content"]["application/json"]["schema"]
+    assert schema["$ref"].startswith("#/components/schemas/Record")
+    record = document["components"]["schemas"][schema["$ref"].rsplit("/", 1)[1]]
+    assert {"submission_id", "track", "racer", "evaluations", "design"} <= set(record["required"])
+    assert {"200", "201", "413", "422", "429"} <= set(push["responses"])
+    assert push["security"] == [{"sigv4": []}]
+    assert document["components"]["securitySchemes"]["sigv4"]["x-amazon-apigateway-authtype"] == "awsSigv4"
+
+
+def test_reads_list_400_not_powertools_default_422(document: dict[str, Any]) -> None:
+    board = document["paths"]["/boards/{board}"]["get"]
+    assert "422" not in board["responses"]
+    assert board["responses"]["400"]["content"]["application/json"]["schema"]["$ref"].endswith("/ErrorBody")
+    limit = next(p for p in board["parameters"] if p["name"] == "limit")
+    assert (limit["in"], limit["schema"]["minimum"], limit["schema"]["maximum"]) == ("query", 1, 500)
+    assert "HTTPValidationError" not in document["components"]["schemas"]
+
+
+def test_pages_are_html(document: dict[str, Any]) -> None:
+    for path in ("/", "/boards/{board}/view"):
+        assert "text/html" in document["paths"][path]["get"]["responses"]["200"]["content"]
