@@ -13,9 +13,9 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
   so that history reads stay small; it carries no index attribute, so no index copies it.
 
 A push is one transaction: the submission (and its record) is put if absent, and the entry put if
-the racer has none (the board's ``participants`` + 1 in the same transaction) or if it is strictly better — a
-ConditionExpression on the stored entry, so concurrent pushes never lose a best. Only this
-module talks to DynamoDB.
+the racer has none (the board's ``participants`` + 1 in the same transaction) or if it is strictly
+better — a ConditionExpression on the stored entry, so concurrent pushes never lose a best. Only
+this module talks to DynamoDB.
 """
 
 from __future__ import annotations
