@@ -11,7 +11,6 @@ import os
 from functools import cache
 
 from ..service import LeaderboardService
-from ..stores.s3_archive import S3Archive
 
 
 @cache
@@ -19,6 +18,7 @@ def service_from_environment() -> LeaderboardService:
     # Imported here so that importing a handler does not need boto3's DynamoDB layer (and tests
     # can swap this function for an SQLite-backed service).
     from ..stores.dynamodb import DynamoDbStore
+    from ..stores.s3_archive import S3Archive
 
     bucket = os.environ.get("ARCHIVE_BUCKET")
     return LeaderboardService(

@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 from urllib.parse import quote
 
-import boto3
 from drboard_assembler.record import Record
 
 if TYPE_CHECKING:
@@ -22,7 +21,11 @@ PREFIX = "records/"
 class S3Archive:
     def __init__(self, bucket: str, client: S3Client | None = None) -> None:
         self.bucket = bucket
-        self._client: S3Client = client or boto3.client("s3")
+        if client is None:
+            import boto3  # here, so that importing the module stays cheap for a cold start
+
+            client = boto3.client("s3")
+        self._client: S3Client = client
 
     @staticmethod
     def key(board_id: str, submission_id: str) -> str:
