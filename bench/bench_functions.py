@@ -96,9 +96,11 @@ def built_sizes(built: Path | None) -> dict[str, int]:
 
 
 def handler_against_query(server: DynamoDbLocal, racers: int, reps: int) -> tuple[list[float], list[float]]:
-    os.environ.update(LAMBDA_ENVIRONMENT | {"AWS_ENDPOINT_URL_DYNAMODB": server.endpoint,
-                                            "AWS_ACCESS_KEY_ID": DUMMY_CREDENTIALS["aws_access_key_id"],
-                                            "AWS_SECRET_ACCESS_KEY": DUMMY_CREDENTIALS["aws_secret_access_key"]})
+    os.environ.update(LAMBDA_ENVIRONMENT | {
+        "AWS_ENDPOINT_URL_DYNAMODB": server.endpoint,
+        "AWS_ACCESS_KEY_ID": DUMMY_CREDENTIALS["aws_access_key_id"],
+        "AWS_SECRET_ACCESS_KEY": DUMMY_CREDENTIALS["aws_secret_access_key"],
+    })
     board_id = f"bench_{racers}"
     client = server.client()
     create_board_table(client, TABLE)
@@ -146,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     runs, reps = (3, 30) if args.quick else (9, 200)
     report = Report()
 
-    for function, kind in HANDLERS.items():
+    for kind in HANDLERS.values():
         p50, _ = p50_p95(cold_import_ms(f"drboard_functions.handlers.{kind}", runs))
         report.add(f"cold import of the {kind} handler module p50", p50, "ms",
                    ok=p50 <= COLD_IMPORT_TARGET_MS, target=f"<= {COLD_IMPORT_TARGET_MS} ms",
