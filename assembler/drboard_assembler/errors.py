@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 
 class AssemblyError(Exception):
     """Bad input: a file is missing, malformed, oversized or inconsistent.
@@ -20,3 +22,14 @@ class AssemblyError(Exception):
         where = f"{self.file}: {self.field}" if self.field else self.file
         hint = f" (use {self.flag})" if self.flag else ""
         return f"{where}: {self.problem}{hint}"
+
+
+def field_path(loc: Sequence[int | str]) -> str:
+    """A pydantic error location as the record reads: ``evaluations[0].laps[2].time_ms``."""
+    path = ""
+    for part in loc:
+        if isinstance(part, int):
+            path += f"[{part}]"
+        else:
+            path += f".{part}" if path else str(part)
+    return path

@@ -9,7 +9,7 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from .errors import AssemblyError
+from .errors import AssemblyError, field_path
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 
@@ -65,17 +65,7 @@ def from_validation_error(error: ValidationError, name: str) -> AssemblyError:
     first = error.errors(include_url=False)[0]
     if first["type"] in ("json_invalid", "json_type"):
         return AssemblyError(name, "", f"not valid JSON ({first['msg']})")
-    return AssemblyError(name, field_path(first["loc"]), first["msg"])
-
-
-def field_path(loc: tuple[int | str, ...]) -> str:
-    path = ""
-    for part in loc:
-        if isinstance(part, int):
-            path += f"[{part}]"
-        else:
-            path += f".{part}" if path else str(part)
-    return path or "(top level)"
+    return AssemblyError(name, field_path(first["loc"]) or "(top level)", first["msg"])
 
 
 def parse_yaml(data: bytes, name: str) -> dict[str, Any]:

@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 
 import click
 from drboard_assembler import AssemblyError, Overrides, Record, assemble
+from drboard_functions import display
 from drboard_functions import errors as domain
 from rich.console import Console
 
@@ -179,7 +180,7 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
 def _print_dry_run(path: Path, record: Record) -> None:
     best = min((run.best_lap_ms for run in record.evaluations if run.best_lap_ms), default=None)
     done = max(run.best_completion_pct for run in record.evaluations)
-    result = render.seconds(best) if best else f"{render.percent(done)} done"
+    result = display.seconds(best) if best else f"{display.percent(done)} done"
     out.print(f"{path}: {record.racer} · {record.model_name} · {record.track} · "
               f"{len(record.evaluations)} evaluation runs · best {result} · not sent (dry run)",
               soft_wrap=True)

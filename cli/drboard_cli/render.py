@@ -9,10 +9,18 @@ from collections.abc import Iterable
 from typing import IO, Any
 
 from drboard_assembler.record import Record
+from drboard_functions.display import (
+    DASH,
+    algorithm_name,
+    design_summary,
+    gap,
+    method_label,
+    percent,
+    seconds,
+)
 from drboard_functions.models import (
     BoardPage,
     BoardView,
-    Design,
     EntryView,
     HistoryItem,
     PushReceipt,
@@ -21,29 +29,6 @@ from drboard_functions.models import (
 from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
-
-DASH = "—"
-_ALGORITHMS = {"clipped_ppo": "PPO", "sac": "SAC"}
-
-
-def seconds(ms: int | None) -> str:
-    return DASH if ms is None else f"{ms / 1000:.3f} s"
-
-
-def gap(ms: int | None) -> str:
-    if ms is None:
-        return DASH
-    return "leader" if ms == 0 else f"+{ms / 1000:.3f} s"
-
-
-def percent(value: float) -> str:
-    return f"{value:g} %"
-
-
-def design_summary(design: Design) -> str:
-    algorithm = _ALGORITHMS.get(design.algorithm, design.algorithm)
-    space = f"{design.actions} actions" if design.actions else "continuous"
-    return f"{algorithm}, {space}, {design.max_speed:g} m/s, ±{design.max_steering:g}°"
 
 
 def _time_label(entry: EntryView) -> str:
@@ -82,13 +67,6 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
             cells.append(entry.submitted_at.strftime("%b %d %H:%M"))
         table.add_row(*cells, style=None if entry.qualified else "dim")
     return table
-
-
-def method_label(board: BoardView) -> str:
-    names = {"BEST_LAP_TIME": "best lap", "AVG_LAP_TIME": "average lap",
-             "TOTAL_TIME": "total time"}
-    laps = "lap" if board.min_laps == 1 else "laps"
-    return f"{names[board.method.value]}, {board.min_laps} {laps} to qualify"
 
 
 def boards_table(boards: list[BoardView]) -> Table:
@@ -193,7 +171,7 @@ def racer_panel(view: RacerView) -> Group:
     summary.add_row("Result", f"{_time_label(entry)} · gap {gap(entry.gap_ms)}")
     summary.add_row("Model", f"{record.model_name} ({record.source_layout.value} files)")
     design = record.design
-    summary.add_row("Algorithm", _ALGORITHMS.get(design.algorithm, design.algorithm))
+    summary.add_row("Algorithm", algorithm_name(design.algorithm))
     summary.add_row("Network", design.neural_network or DASH)
     summary.add_row("Sensors", ", ".join(design.sensors) or DASH)
     if record.training:

@@ -49,6 +49,7 @@ from aws_lambda_powertools.event_handler.openapi.params import Body, Path, Query
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import __version__ as assembler_version
 from drboard_assembler import limits
+from drboard_assembler.errors import field_path
 from drboard_assembler.record import Record
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -286,17 +287,6 @@ def status_of(error: DomainError) -> HTTPStatus:
         if isinstance(error, kind):
             return status
     return HTTPStatus.BAD_REQUEST  # a domain error is raised on purpose: the request is at fault
-
-
-def field_path(loc: Sequence[str | int]) -> str:
-    """``("evaluations", 0, "laps", 2, "time_ms")`` -> ``evaluations[0].laps[2].time_ms``."""
-    path = ""
-    for part in loc:
-        if isinstance(part, int):
-            path += f"[{part}]"
-        else:
-            path += f".{part}" if path else str(part)
-    return path
 
 
 def _problems(errors: Sequence[Any]) -> tuple[str, list[dict[str, str]]]:

@@ -11,16 +11,11 @@ from collections.abc import Iterable
 from html import escape
 from urllib.parse import quote, urlencode
 
-from .models import BoardPage, BoardView, Design, EntryView, TimingMethod
+from .display import DASH, gap, method_label, percent, seconds
+from .display import design_summary as _design_summary
+from .models import BoardPage, BoardView, Design, EntryView
 
-DASH = "—"
 REFRESH_S = 30
-_ALGORITHMS = {"clipped_ppo": "PPO", "sac": "SAC"}
-_METHODS = {
-    TimingMethod.BEST_LAP_TIME: "best lap",
-    TimingMethod.AVG_LAP_TIME: "average lap",
-    TimingMethod.TOTAL_TIME: "total time",
-}
 _STYLE = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0;
 background:#0f1720;color:#e6edf3}
@@ -40,39 +35,12 @@ footer{color:#6b7886;font-size:.8rem;margin-top:1.5rem}
 """.strip()
 
 
-# ---- formatting ---------------------------------------------------------------------------------
-
-
-def seconds(ms: int | None) -> str:
-    """``12345`` -> ``12.345 s``."""
-    return DASH if ms is None else f"{ms / 1000:.3f} s"
-
-
-def gap(ms: int | None) -> str:
-    if ms is None:
-        return DASH
-    return "leader" if ms == 0 else f"+{ms / 1000:.3f} s"
-
-
-def percent(value: float) -> str:
-    return f"{value:g} %"
+def board_path(board_id: str) -> str:
+    return "/boards/" + quote(board_id, safe="") + "/view"
 
 
 def design_summary(design: Design) -> str:
-    algorithm = _ALGORITHMS.get(design.algorithm, design.algorithm)
-    space = f"{design.actions} actions" if design.actions else "continuous"
-    sensors = ", ".join(design.sensors)
-    summary = f"{algorithm}, {space}, {design.max_speed:g} m/s, ±{design.max_steering:g}°"
-    return f"{summary}; {sensors}" if sensors else summary
-
-
-def method_label(board: BoardView) -> str:
-    laps = "lap" if board.min_laps == 1 else "laps"
-    return f"{_METHODS[board.method]}, {board.min_laps} {laps} to qualify"
-
-
-def board_path(board_id: str) -> str:
-    return "/boards/" + quote(board_id, safe="") + "/view"
+    return _design_summary(design, sensors=True)
 
 
 # ---- pages --------------------------------------------------------------------------------------

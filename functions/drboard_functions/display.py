@@ -1,0 +1,46 @@
+"""How results read for people, wherever they are shown: the CLI's tables and the web pages."""
+
+from __future__ import annotations
+
+from .models import BoardView, Design, TimingMethod
+
+DASH = "—"
+_ALGORITHMS = {"clipped_ppo": "PPO", "sac": "SAC"}
+_METHODS = {
+    TimingMethod.BEST_LAP_TIME: "best lap",
+    TimingMethod.AVG_LAP_TIME: "average lap",
+    TimingMethod.TOTAL_TIME: "total time",
+}
+
+
+def seconds(ms: int | None) -> str:
+    """``12345`` -> ``12.345 s``."""
+    return DASH if ms is None else f"{ms / 1000:.3f} s"
+
+
+def gap(ms: int | None) -> str:
+    if ms is None:
+        return DASH
+    return "leader" if ms == 0 else f"+{ms / 1000:.3f} s"
+
+
+def percent(value: float) -> str:
+    return f"{value:g} %"
+
+
+def algorithm_name(algorithm: str) -> str:
+    return _ALGORITHMS.get(algorithm, algorithm)
+
+
+def design_summary(design: Design, *, sensors: bool = False) -> str:
+    """``PPO, 14 actions, 2 m/s, ±30°`` (and the sensors, when asked)."""
+    space = f"{design.actions} actions" if design.actions else "continuous"
+    summary = (f"{algorithm_name(design.algorithm)}, {space}, {design.max_speed:g} m/s, "
+               f"±{design.max_steering:g}°")
+    listed = ", ".join(design.sensors)
+    return f"{summary}; {listed}" if sensors and listed else summary
+
+
+def method_label(board: BoardView) -> str:
+    laps = "lap" if board.min_laps == 1 else "laps"
+    return f"{_METHODS[board.method]}, {board.min_laps} {laps} to qualify"
