@@ -16,7 +16,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -24,6 +24,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from bench_dynamodb import TABLE, Report, p50_p95, seed_board  # noqa: E402
+from drboard_cli.serve import LocalContext  # noqa: E402
 
 from tests.integration.dynamodb_local import DUMMY_CREDENTIALS, REGION, DynamoDbLocal  # noqa: E402
 from tests.tablekit import create_board_table  # noqa: E402
@@ -37,14 +38,6 @@ LAMBDA_ENVIRONMENT = {  # what the template's Globals give the functions
     "POWERTOOLS_LOG_LEVEL": "WARNING", "POWERTOOLS_TRACE_DISABLED": "true",
     "TABLE_NAME": TABLE, "AWS_DEFAULT_REGION": REGION,
 }
-
-
-@dataclass
-class LambdaContext:
-    function_name: str = "drboard-bench"
-    memory_limit_in_mb: int = 512
-    invoked_function_arn: str = "arn:aws:lambda:us-east-1:123456789012:function:drboard-bench"
-    aws_request_id: str = "bench"
 
 
 # ---- cold import ------------------------------------------------------------------------------
@@ -116,7 +109,7 @@ def handler_against_query(server: DynamoDbLocal, racers: int, reps: int) -> tupl
     event["headers"].pop("origin", None)
 
     def invoke() -> None:
-        answer = pull.lambda_handler(event, LambdaContext())  # type: ignore[arg-type]
+        answer = pull.lambda_handler(event, LocalContext())  # type: ignore[arg-type]
         assert answer["statusCode"] == 200, answer["body"][:200]
         assert len(json.loads(answer["body"])["entries"]) == 100
 

@@ -10,12 +10,12 @@ from __future__ import annotations
 import copy
 import json
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import boto3
 import pytest
+from drboard_cli.serve import LocalContext
 from moto import mock_aws
 from samtranslator.parser.parser import Parser
 from samtranslator.translator.translator import Translator
@@ -186,21 +186,13 @@ def deployed(aws: CallRecorder, sam: dict[str, Any]) -> dict[str, str]:
     return names
 
 
-@dataclass
-class LambdaContext:
-    function_name: str = "drboard-test"
-    memory_limit_in_mb: int = 512
-    invoked_function_arn: str = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
-    aws_request_id: str = "c6af9ac6-7b61-11e6-9a41-93e812345678"
-
-
 def _invoke(kind: str, event_file: str) -> dict[str, Any]:
     from drboard_functions.handlers import pull, push, wiring
 
     wiring.service_from_environment.cache_clear()
     handler = push.lambda_handler if kind == "push" else pull.lambda_handler
     event = json.loads((EVENTS / event_file).read_text())
-    result: dict[str, Any] = handler(event, LambdaContext())
+    result: dict[str, Any] = handler(event, LocalContext())
     return result
 
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
+from drboard_cli.serve import LocalContext
 
 # Before the handlers are imported: Powertools reads these when it builds its Tracer and Metrics.
 os.environ.setdefault("POWERTOOLS_SERVICE_NAME", "drboard")
@@ -36,12 +36,7 @@ REGION = "eu-west-1"
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 
 
-@dataclass
-class FakeLambdaContext:
-    function_name: str = "drboard-PullFunction-test"
-    memory_limit_in_mb: int = 512
-    invoked_function_arn: str = "arn:aws:lambda:eu-west-1:123456789012:function:drboard-test"
-    aws_request_id: str = "52fdfc07-2182-454f-963f-5f0f9a621d72"
+FakeLambdaContext = LocalContext  # what `drboard serve` gives the resolvers, too
 
 
 def load(name: str) -> dict[str, Any]:
