@@ -19,13 +19,12 @@ import json
 import os
 import platform
 import random
-import statistics
 import sys
 import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
@@ -41,6 +40,9 @@ from drboard_functions.stores.dynamodb import RANK_INDEX, DynamoDbStore, board_i
 from tests.integration.dynamodb_local import DynamoDbLocal  # noqa: E402
 from tests.tablekit import create_board_table  # noqa: E402
 
+sys.path.insert(0, str(ROOT / "bench"))
+from figures import Report, p50_p95, timed_ms  # noqa: E402
+
 TRACK = "reInvent2019_track"
 TABLE = "drboard-bench"
 PAGE = 100
@@ -51,70 +53,6 @@ ITEMS_READ_MAX_OVER = 1  # items read by a top-100 may exceed 100 by this much
 PULL_SCALING_MAX = 1.5
 
 # ---- figures (the same table as bench_local.py) -------------------------------------------------
-
-
-@dataclass
-class Figure:
-    name: str
-    value: float | None
-    unit: str
-    target: str = ""
-    ok: bool | None = None  # None: informational, no target
-    note: str = ""
-
-    def shown(self) -> str:
-        if self.value is None:
-            return "n/a"
-        if self.unit == "ms":
-            return f"{self.value:,.2f} ms" if self.value < 100 else f"{self.value:,.0f} ms"
-        if self.unit == "s":
-            return f"{self.value:,.2f} s"
-        if self.unit == "x":
-            return f"{self.value:,.2f} x"
-        return f"{self.value:,.0f} {self.unit}".strip()
-
-
-@dataclass
-class Report:
-    figures: list[Figure] = field(default_factory=list)
-    config: dict[str, Any] = field(default_factory=dict)
-
-    def add(self, name: str, value: float | None, unit: str, *, ok: bool | None = None,
-            target: str = "", note: str = "") -> Figure:
-        figure = Figure(name, value, unit, target, ok, note)
-        self.figures.append(figure)
-        print(f"  {name}: {figure.shown()}" + (f"  [{_verdict(ok)}]" if ok is not None else ""),
-              file=sys.stderr, flush=True)
-        return figure
-
-    def table(self) -> str:
-        rows = [("Figure", "Value", "Target", "Result")]
-        rows += [(f.name, f.shown(), f.target or "-", _verdict(f.ok)) for f in self.figures]
-        widths = [max(len(row[i]) for row in rows) for i in range(4)]
-        lines = []
-        for index, (name, value, target, result) in enumerate(rows):
-            lines.append(f"{name:<{widths[0]}}  {value:>{widths[1]}}  {target:<{widths[2]}}  {result}")
-            if index == 0:
-                lines.append("  ".join("-" * w for w in widths))
-        notes = [f"  {f.name}: {f.note}" for f in self.figures if f.note]
-        return "\n".join(lines + (["", "Notes:", *notes] if notes else []))
-
-
-def _verdict(ok: bool | None) -> str:
-    return "-" if ok is None else "PASS" if ok else "FAIL"
-
-
-def p50_p95(samples: list[float]) -> tuple[float, float]:
-    if len(samples) == 1:
-        return samples[0], samples[0]
-    cuts = statistics.quantiles(samples, n=100, method="inclusive")
-    return cuts[49], cuts[94]
-
-
-def timed_ms(call: Callable[[], Any]) -> float:
-    start = time.perf_counter()
-    call()
-    return (time.perf_counter() - start) * 1000
 
 
 # ---- seeding ----------------------------------------------------------------------------------

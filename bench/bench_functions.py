@@ -23,8 +23,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from bench_dynamodb import TABLE, Report, p50_p95, seed_board  # noqa: E402
+from bench_dynamodb import TABLE, seed_board  # noqa: E402
 from drboard_cli.serve import LocalContext  # noqa: E402
+from figures import Report, p50_p95  # noqa: E402
 
 from tests.integration.dynamodb_local import DUMMY_CREDENTIALS, REGION, DynamoDbLocal  # noqa: E402
 from tests.tablekit import create_board_table  # noqa: E402

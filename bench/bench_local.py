@@ -27,11 +27,9 @@ import sys
 import tempfile
 import textwrap
 import time
-from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import Any
 
 from drboard_assembler import __version__ as ASSEMBLER_VERSION
 from drboard_assembler.design import load_design
@@ -40,6 +38,7 @@ from drboard_functions import ranking
 from drboard_functions.models import Entry, Submission
 from drboard_functions.service import LeaderboardService, _design, racer_key
 from drboard_functions.stores.sqlite import SqliteStore
+from figures import Report, p50_p95, timed_ms
 
 TRACK = "reInvent2019_track"  # "reInvent2019" resolves to it; its board id is the same
 BOARD_ID = TRACK
@@ -77,81 +76,6 @@ HYPERPARAMETERS = {
 
 
 # ---- figures --------------------------------------------------------------------------------
-
-
-@dataclass
-class Figure:
-    name: str
-    value: float | None
-    unit: str
-    target: str = ""
-    ok: bool | None = None  # None: informational, no target
-    note: str = ""
-
-    def shown(self) -> str:
-        if self.value is None:
-            return "n/a"
-        if self.unit == "ms":
-            return f"{self.value:,.2f} ms" if self.value < 100 else f"{self.value:,.0f} ms"
-        if self.unit == "s":
-            return f"{self.value:,.2f} s"
-        if self.unit == "x":
-            return f"{self.value:,.2f} x"
-        if self.unit == "MiB":
-            return f"{self.value:,.1f} MiB"
-        return f"{self.value:,.0f} {self.unit}".strip()
-
-
-@dataclass
-class Report:
-    figures: list[Figure] = field(default_factory=list)
-    config: dict[str, Any] = field(default_factory=dict)
-
-    def add(self, name: str, value: float | None, unit: str, *, limit: float | None = None,
-            target: str = "", note: str = "") -> Figure:
-        ok = None
-        if limit is not None:
-            ok = value is not None and value <= limit
-            target = target or f"<= {Figure('', limit, unit).shown()}"
-        figure = Figure(name, value, unit, target, ok, note)
-        self.figures.append(figure)
-        print(f"  {name}: {figure.shown()}" + (f"  [{_verdict(ok)}]" if ok is not None else ""),
-              file=sys.stderr, flush=True)
-        return figure
-
-    def table(self) -> str:
-        rows = [("Figure", "Value", "Target", "Result")]
-        for f in self.figures:
-            rows.append((f.name, f.shown(), f.target or "-", _verdict(f.ok)))
-        widths = [max(len(row[i]) for row in rows) for i in range(4)]
-        lines = []
-        for index, (name, value, target, result) in enumerate(rows):
-            lines.append(f"{name:<{widths[0]}}  {value:>{widths[1]}}  {target:<{widths[2]}}  "
-                         f"{result}")
-            if index == 0:
-                lines.append("  ".join("-" * w for w in widths))
-        notes = [f"  {f.name}: {f.note}" for f in self.figures if f.note]
-        if notes:
-            lines += ["", "Notes:", *notes]
-        return "\n".join(lines)
-
-
-def _verdict(ok: bool | None) -> str:
-    return "-" if ok is None else "PASS" if ok else "FAIL"
-
-
-def p50_p95(samples: list[float]) -> tuple[float, float]:
-    """The median and the 95th percentile (inclusive method) of the samples."""
-    if len(samples) == 1:
-        return samples[0], samples[0]
-    cuts = statistics.quantiles(samples, n=100, method="inclusive")
-    return cuts[49], cuts[94]
-
-
-def timed_ms(call: Callable[[], Any]) -> float:
-    start = time.perf_counter()
-    call()
-    return (time.perf_counter() - start) * 1000
 
 
 # ---- building records cheaply -----------------------------------------------------------------
