@@ -44,6 +44,24 @@ class TooSoon(DomainError):
         self.retry_after_s = retry_after_s
 
 
+class BoardClosed(DomainError):
+    """The board is not open: it opens later or has closed (HTTP 403). Retrying will not help
+    until the organiser changes its window."""
+
+
+class SubmissionLimitReached(DomainError):
+    """The racer has used every submission the board allows (HTTP 403)."""
+
+
+class BoardExists(DomainError):
+    """A board with this id already exists (HTTP 409)."""
+
+
+class BoardLocked(DomainError):
+    """The change would rescore entries already on the board, or touch a track's default
+    board in a way its rules do not allow (HTTP 409)."""
+
+
 class NotAuthorized(DomainError):
     """The board refused the caller (HTTP 401/403): unsigned, or not allowed."""
 
