@@ -6,14 +6,33 @@ the API returns and the CLI prints (their field names are the stable JSON the RE
 
 from __future__ import annotations
 
-from datetime import datetime
+from datetime import UTC, datetime
 from enum import StrEnum
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Self
 
 from drboard_assembler.record import RaceType, Record
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
 MAX_PAGE = 500
+MAX_COOLDOWN_S = 7 * 24 * 3600
+MAX_SUBMISSIONS = 10_000
+MAX_BOARD_ID_CHARS = 80  # a custom track's name (64) and its direction and race suffixes
+BOARD_ID_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
+
+
+def _aware_utc(moment: datetime) -> datetime:
+    if moment.tzinfo is None:
+        raise ValueError("give a time zone, e.g. 2026-12-01T18:00:00Z or +01:00")
+    return moment.astimezone(UTC)
+
+
+#: A moment with a time zone, kept in UTC.
+Moment = Annotated[datetime, AfterValidator(_aware_utc)]
+BoardId = Annotated[str, StringConstraints(pattern=BOARD_ID_PATTERN)]
+Title = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=120)]
+Description = Annotated[str, StringConstraints(strip_whitespace=True, max_length=2000)]
+CooldownSeconds = Annotated[int, Field(ge=0, le=MAX_COOLDOWN_S)]
+SubmissionCap = Annotated[int, Field(ge=1, le=MAX_SUBMISSIONS)]
 
 
 class TimingMethod(StrEnum):
@@ -48,14 +67,63 @@ class BoardRules(Model):
         return data
 
 
+class BoardStatus(StrEnum):
+    UPCOMING = "UPCOMING"
+    OPEN = "OPEN"
+    CLOSED = "CLOSED"
+
+
 class Board(Model):
-    board_id: str
-    track: str
+    """A board and its rules. A track's default board (``kind="default"``) is made by its first
+    push and keeps the default rules; an organiser's named boards set their own."""
+
+    board_id: Annotated[str, StringConstraints(min_length=1, max_length=MAX_BOARD_ID_CHARS)]
+    kind: Literal["default", "named"] = "default"
+    track: Annotated[str, StringConstraints(min_length=1, max_length=64)]
     direction: Literal["cw", "ccw"] | None = None
     race_type: RaceType = RaceType.TIME_TRIAL
-    title: str
+    title: Title
+    description: Description = ""
     rules: BoardRules = BoardRules()
+    opens_at: datetime | None = None
+    closes_at: datetime | None = None
+    cooldown_s: CooldownSeconds = 0
+    max_submissions: SubmissionCap | None = None
     created_at: datetime
+    deleted_at: datetime | None = None
+
+    @model_validator(mode="after")
+    def _window_in_order(self) -> Self:
+        if self.opens_at and self.closes_at and self.closes_at <= self.opens_at:
+            raise ValueError("closes_at must be after opens_at")
+        return self
+
+    def status(self, now: datetime) -> BoardStatus:
+        if self.opens_at is not None and now < self.opens_at:
+            return BoardStatus.UPCOMING
+        if self.closes_at is not None and now >= self.closes_at:
+            return BoardStatus.CLOSED
+        return BoardStatus.OPEN
+
+    @property
+    def limited(self) -> bool:
+        return bool(self.cooldown_s) or self.max_submissions is not None
+
+
+class SubmissionLimits(Model):
+    """What a store checks atomically with a push: the racer's last submission on the board is
+    at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``."""
+
+    now: datetime
+    cooldown_s: int = 0
+    max_submissions: int | None = None
+
+
+class RacerTally(Model):
+    """How many submissions a racer made on a board, and when the last one was."""
+
+    submissions: int = 0
+    last_submitted_at: datetime | None = None
 
 
 class Score(Model):
@@ -134,13 +202,20 @@ class EntryView(Model):
 
 class BoardView(Model):
     board_id: str
+    kind: Literal["default", "named"]
+    title: str
+    description: str
     track: str
     track_name: str
     direction: Literal["cw", "ccw"] | None
     race_type: RaceType
     method: TimingMethod
     min_laps: int
-    title: str
+    status: BoardStatus
+    opens_at: datetime | None
+    closes_at: datetime | None
+    cooldown_s: int
+    max_submissions: int | None
     participants: int
 
 
@@ -180,3 +255,104 @@ class PushReceipt(Model):
     participants: int
     entry: EntryView
     submission: HistoryItem
+
+
+class RacerStatus(Model):
+    """Where a racer stands on one board: their latest submission and their best's rank."""
+
+    board: BoardView
+    racer: str
+    latest: HistoryItem
+    entry: EntryView
+    submissions: int
+    submissions_left: int | None  # None: the board sets no maximum
+    next_submission_at: datetime | None  # None: the racer may submit now (if the board is open)
+
+
+class RacerSummary(Model):
+    racer: str
+    boards: list[RacerStatus]
+
+
+class RacerHistory(Model):
+    racer: str
+    history: list[HistoryItem]
+
+
+# ---- managing boards -------------------------------------------------------------------------
+
+
+class BoardSpec(Model):
+    """A named board as an organiser creates it. The track is any of its names (or, with
+    ``custom_track``, a track of their own named exactly); ``min_laps`` defaults to the method's."""
+
+    board_id: Annotated[BoardId, Field(description="Letters, digits, `_`, `-` and `.`; up to 64.")]
+    title: Title
+    description: Description = ""
+    track: Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=64)]
+    custom_track: bool = False
+    clockwise: bool = False
+    race_type: RaceType = RaceType.TIME_TRIAL
+    method: TimingMethod = TimingMethod.BEST_LAP_TIME
+    min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
+    opens_at: Moment | None = None
+    closes_at: Moment | None = None
+    cooldown_s: CooldownSeconds = 0
+    max_submissions: SubmissionCap | None = None
+
+
+class BoardChanges(Model):
+    """An update of a named board: only the fields given change; ``null`` clears a time or a
+    limit. The track, method and minimum laps change only while the board has no entries."""
+
+    title: Title | None = None
+    description: Description | None = None
+    method: TimingMethod | None = None
+    min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
+    opens_at: Moment | None = None
+    closes_at: Moment | None = None
+    cooldown_s: CooldownSeconds | None = None
+    max_submissions: SubmissionCap | None = None
+
+
+# ---- export and import -----------------------------------------------------------------------
+
+class ExportedBoard(Model):
+    kind: Literal["board"] = "board"
+    format: Literal["drboard-export/1"] = "drboard-export/1"
+    exported_at: datetime
+    board: Board
+
+
+class ExportedEntry(Model):
+    kind: Literal["entry"] = "entry"
+    entry: Entry
+
+
+class ExportedSubmission(Model):
+    kind: Literal["submission"] = "submission"
+    submission: Submission
+    record: Record
+
+
+ExportLine = Annotated[ExportedBoard | ExportedEntry | ExportedSubmission, Field(discriminator="kind")]
+
+
+class ExportPage(Model):
+    """One page of a board's export: the board first, then its entries, then every submission."""
+
+    lines: list[ExportLine]
+    next_cursor: str | None = None
+
+
+class ImportedSubmission(Model):
+    """A submission as an import replays it: the record, and when it was first submitted."""
+
+    submitted_at: Moment
+    record: Record
+
+
+class ImportReceipt(Model):
+    status: Literal["created", "duplicate"]
+    board_id: str
+    submission_id: str

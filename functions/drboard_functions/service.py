@@ -9,29 +9,60 @@ from __future__ import annotations
 import base64
 import binascii
 import json
+import math
+import re
 from collections.abc import Callable
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
+from typing import Any, Literal
 
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
+from drboard_assembler.errors import field_path
 from drboard_assembler.record import RaceType, Record
+from pydantic import ValidationError
 
 from . import ranking
-from .errors import BoardMismatch, BoardNotFound, InvalidQuery, RacerNotFound
+from .errors import (
+    BoardClosed,
+    BoardExists,
+    BoardLocked,
+    BoardMismatch,
+    BoardNotFound,
+    DomainError,
+    InvalidQuery,
+    RacerNotFound,
+    SubmissionLimitReached,
+    TooSoon,
+)
 from .models import (
+    BOARD_ID_PATTERN,
     MAX_PAGE,
     Board,
+    BoardChanges,
     BoardPage,
     BoardRules,
+    BoardSpec,
+    BoardStatus,
     BoardView,
     Design,
     Entry,
     EntryView,
+    ExportedBoard,
+    ExportedEntry,
+    ExportedSubmission,
+    ExportLine,
+    ExportPage,
     HistoryItem,
+    ImportedSubmission,
+    ImportReceipt,
     PushReceipt,
+    RacerStatus,
+    RacerSummary,
+    RacerTally,
     RacerView,
     Submission,
+    SubmissionLimits,
 )
-from .stores.base import BoardStore, RecordArchive, StoredBoard
+from .stores.base import BoardHasEntries, BoardStore, LimitReached, RecordArchive, StoredBoard
 
 Clock = Callable[[], datetime]
 MAX_CURSOR_CHARS = 1024
@@ -108,48 +139,44 @@ class LeaderboardService:
     # ---- push -----------------------------------------------------------------------------
 
     def push(self, record: Record, board_id: str | None = None) -> PushReceipt:
+        """Store a run on its board. A run already on the board is a duplicate: it changes
+        nothing and is answered whatever the board's window and limits (it never counts)."""
         now = self.clock()
-        stored = self._board_for(record, board_id, now)
-        board = stored.board
-        score = ranking.score_record(record, board.rules)
+        board = self._board_for(record, board_id, now).board
         key = racer_key(record.racer)
-        score_key = ranking.score_key(score)
-        submission = Submission(
-            board_id=board.board_id, racer=record.racer, racer_key=key,
-            submission_id=record.submission_id, model_name=record.model_name,
-            submitted_at=now, score=score, score_key=score_key,
-        )
-        entry = Entry(
-            board_id=board.board_id, racer=record.racer, racer_key=key,
-            model_name=record.model_name, submission_id=record.submission_id,
-            achieved_at=now, score=score, design=_design(record), score_key=score_key,
-            rank_key=ranking.rank_key(score_key, now, key),
-        )
-        outcome = self.store.record_submission(submission, record, entry)
-        best = outcome.entry
-        if outcome.duplicate:
-            submission = self._stored_submission(submission)
+        stored = self.store.get_submission(board.board_id, key, record.submission_id)
+        if stored is not None:
+            best = self.store.get_entry(board.board_id, key)
+            assert best is not None, "a stored submission always has an entry"
+            return self._receipt(stored, best, duplicate=True, improved=False)
+        _check_open(board, now)
+        submission, entry = _scored(record, board, now)
+        limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
+                                  max_submissions=board.max_submissions)
+        try:
+            outcome = self.store.record_submission(submission, record, entry, limits)
+        except LimitReached as refused:
+            raise _limit_error(board, record.racer, refused.tally, now) from None
+        if outcome.duplicate:  # pushed twice at once: the other push stored it first
+            submission = self.store.get_submission(board.board_id, key, record.submission_id) or submission
         elif self.archive is not None:
             self.archive.put(board.board_id, record)
-        rank = self.store.count_better(board.board_id, best.score_key) + 1
-        participants = self._require_board(board.board_id).participants
+        return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
+
+    def _receipt(self, submission: Submission, best: Entry, duplicate: bool,
+                 improved: bool) -> PushReceipt:
+        rank = self.store.count_better(best.board_id, best.score_key) + 1
+        stored, top = self.store.front_page(best.board_id, 1)
         return PushReceipt(
-            status="duplicate" if outcome.duplicate else "created",
-            board_id=board.board_id,
-            submission_id=record.submission_id,
-            improved=outcome.improved,
+            status="duplicate" if duplicate else "created",
+            board_id=best.board_id,
+            submission_id=submission.submission_id,
+            improved=improved,
             rank=rank,
-            participants=participants,
-            entry=_entry_view(best, rank, self._leader(board.board_id)),
+            participants=stored.participants if stored else 1,
+            entry=_entry_view(best, rank, top[0] if top else None),
             submission=_history_item(submission, best),
         )
-
-    def _stored_submission(self, pushed: Submission) -> Submission:
-        """A duplicate's receipt shows the submission as first stored, not the repeat."""
-        for stored in self.store.history(pushed.racer_key, pushed.board_id):
-            if stored.submission_id == pushed.submission_id:
-                return stored
-        return pushed  # pragma: no cover - a duplicate is always in the racer's history
 
     def _board_for(self, record: Record, board_id: str | None, now: datetime) -> StoredBoard:
         default = _default_board(record, now)
@@ -160,21 +187,29 @@ class LeaderboardService:
                 raise BoardNotFound(
                     f"no board {board_id!r}; this run belongs on {default.board_id!r}")
             stored = self.store.create_board(default)
+        _check_not_deleted(stored.board)
         _check_belongs(record, stored.board)
         return stored
 
     # ---- pull -----------------------------------------------------------------------------
 
     def boards(self) -> list[BoardView]:
-        return [_board_view(stored) for stored in self.store.list_boards()]
+        now = self.clock()
+        return [_board_view(stored, now) for stored in self.store.list_boards()
+                if stored.board.deleted_at is None]
 
     def board_page(self, board_id: str, limit: int = 100, cursor: str | None = None) -> BoardPage:
         if not 1 <= limit <= MAX_PAGE:
             raise InvalidQuery(f"limit must be between 1 and {MAX_PAGE}")
-        stored = self._require_board(board_id)
         after = _Cursor.decode(cursor) if cursor else None
-        entries = self.store.top(board_id, limit, after.rank_key if after else None)
-        leader = self._leader(board_id) if after else (entries[0] if entries else None)
+        if after is None:
+            found, entries = self.store.front_page(board_id, limit)
+            stored = self._live(board_id, found)
+            leader = entries[0] if entries else None
+        else:
+            stored = self._require_board(board_id)
+            entries = self.store.top(board_id, limit, after.rank_key)
+            leader = self._leader(board_id)
         views: list[EntryView] = []
         previous = after
         for offset, entry in enumerate(entries):
@@ -184,7 +219,7 @@ class LeaderboardService:
             previous = _Cursor(entry.rank_key, entry.score_key, rank, position)
         more = len(entries) == limit and previous is not None
         return BoardPage(
-            board=_board_view(stored),
+            board=_board_view(stored, self.clock()),
             entries=views,
             next_cursor=previous.encode() if more and previous else None,
         )
@@ -200,7 +235,7 @@ class LeaderboardService:
             raise RacerNotFound(f"the record of {racer!r} on {board_id!r} is missing")
         rank = self.store.count_better(board_id, entry.score_key) + 1
         return RacerView(
-            board=_board_view(stored),
+            board=_board_view(stored, self.clock()),
             racer=entry.racer,
             entry=_entry_view(entry, rank, self._leader(board_id)),
             history=[_history_item(s, entry) for s in self.store.history(key, board_id)],
@@ -208,24 +243,332 @@ class LeaderboardService:
         )
 
     def history(self, racer: str, board_id: str | None = None) -> list[HistoryItem]:
+        """The racer's submissions, oldest first, on one board or on every board."""
         key = racer_key(racer)
-        items = []
-        bests: dict[str, Entry | None] = {}
-        for submission in self.store.history(key, board_id):
-            if submission.board_id not in bests:
-                bests[submission.board_id] = self.store.get_entry(submission.board_id, key)
-            items.append(_history_item(submission, bests[submission.board_id]))
-        return items
+        if board_id is not None:
+            self._require_board(board_id)
+        items: list[HistoryItem] = []
+        for board, submissions in self._by_board(self.store.history(key, board_id)).items():
+            best = self.store.get_entry(board, key)
+            items.extend(_history_item(submission, best) for submission in submissions)
+        return sorted(items, key=lambda item: (item.submitted_at, item.board_id))
+
+    def status(self, racer: str, board_id: str | None = None) -> RacerSummary:
+        """Where the racer stands on each board they pushed to (or on one): their latest
+        submission, their best's rank and gap, and when they may submit next."""
+        key = racer_key(racer)
+        if board_id is not None:
+            self._require_board(board_id)
+        now = self.clock()
+        statuses = []
+        for board, submissions in self._by_board(self.store.history(key, board_id)).items():
+            stored, entry = self.store.get_board(board), self.store.get_entry(board, key)
+            if stored is None or entry is None:  # pragma: no cover - kept together by the store
+                continue
+            statuses.append(self._racer_status(stored, entry, submissions[-1], now))
+        if not statuses:
+            where = f" on {board_id!r}" if board_id else ""
+            raise RacerNotFound(f"{racer!r} has no submissions{where}")
+        statuses.sort(key=lambda status: status.latest.submitted_at, reverse=True)
+        return RacerSummary(racer=statuses[0].racer, boards=statuses)
+
+    def _racer_status(self, stored: StoredBoard, entry: Entry, latest: Submission,
+                      now: datetime) -> RacerStatus:
+        board = stored.board
+        rank = self.store.count_better(board.board_id, entry.score_key) + 1
+        tally = self.store.tally(board.board_id, entry.racer_key)
+        next_at = None
+        if board.cooldown_s and tally.last_submitted_at is not None:
+            ready = tally.last_submitted_at + timedelta(seconds=board.cooldown_s)
+            next_at = ready if ready > now else None
+        left = None
+        if board.max_submissions is not None:
+            left = max(0, board.max_submissions - tally.submissions)
+        return RacerStatus(
+            board=_board_view(stored, now),
+            racer=latest.racer,
+            latest=_history_item(latest, entry),
+            entry=_entry_view(entry, rank, self._leader(board.board_id)),
+            submissions=tally.submissions,
+            submissions_left=left,
+            next_submission_at=next_at,
+        )
+
+    def _by_board(self, submissions: list[Submission]) -> dict[str, list[Submission]]:
+        """The submissions of live boards (not deleted), grouped by board, oldest first."""
+        grouped: dict[str, list[Submission]] = {}
+        live: dict[str, bool] = {}
+        for submission in submissions:
+            board = submission.board_id
+            if board not in live:
+                stored = self.store.get_board(board)
+                live[board] = stored is not None and stored.board.deleted_at is None
+            if live[board]:
+                grouped.setdefault(board, []).append(submission)
+        for group in grouped.values():
+            group.sort(key=lambda s: s.submitted_at)
+        return grouped
 
     def _require_board(self, board_id: str) -> StoredBoard:
-        stored = self.store.get_board(board_id)
+        return self._live(board_id, self.store.get_board(board_id))
+
+    @staticmethod
+    def _live(board_id: str, stored: StoredBoard | None) -> StoredBoard:
         if stored is None:
             raise BoardNotFound(f"no board {board_id!r} (no run has been pushed to it yet)")
+        _check_not_deleted(stored.board)
         return stored
 
     def _leader(self, board_id: str) -> Entry | None:
         top = self.store.top(board_id, 1)
         return top[0] if top else None
+
+    # ---- managing boards (organisers) -----------------------------------------------------
+
+    def create_board(self, spec: BoardSpec) -> BoardView:
+        now = self.clock()
+        track, direction = _spec_track(spec)
+        if is_default_board_id(spec.board_id) or spec.board_id == default_board_id(
+                track, direction, spec.race_type):
+            raise BoardExists(f"{spec.board_id!r} is a track's default board id; "
+                              "give a named board an id of its own")
+        board = _valid_board(
+            board_id=spec.board_id, kind="named", track=track, direction=direction,
+            race_type=spec.race_type, title=spec.title, description=spec.description,
+            rules={"method": spec.method, "min_laps": spec.min_laps},
+            opens_at=spec.opens_at, closes_at=spec.closes_at, cooldown_s=spec.cooldown_s,
+            max_submissions=spec.max_submissions, created_at=now,
+        )
+        if self.store.get_board(board.board_id) is not None:
+            raise BoardExists(f"there is already a board {board.board_id!r}")
+        stored = self.store.create_board(board)
+        if stored.board != board:
+            raise BoardExists(f"there is already a board {board.board_id!r}")
+        return _board_view(stored, now)
+
+    def update_board(self, board_id: str, changes: BoardChanges) -> BoardView:
+        stored = self._named(board_id)
+        board = stored.board
+        given = changes.model_fields_set
+        for name in ("title", "method"):
+            if name in given and getattr(changes, name) is None:
+                raise InvalidQuery(f"{name} cannot be cleared")
+        updates = {name: getattr(changes, name) for name in given
+                   if name not in ("method", "min_laps")}
+        method = changes.method if "method" in given and changes.method else board.rules.method
+        min_laps = changes.min_laps if "min_laps" in given else (
+            None if method != board.rules.method else board.rules.min_laps)
+        rules = BoardRules.model_validate({"method": method, "min_laps": min_laps})
+        rescores = rules != board.rules
+        updated = _valid_board(**(board.model_dump() | updates | {"rules": rules.model_dump()}))
+        if rescores and stored.participants:
+            raise BoardLocked(_LOCKED.format(board_id))
+        return self._save(updated, only_if_empty=rescores)
+
+    def close_board(self, board_id: str) -> BoardView:
+        """Close the board now; an upcoming board closes without ever opening."""
+        board = self._named(board_id).board
+        now = self.clock()
+        if board.status(now) is BoardStatus.CLOSED:
+            return _board_view(self._named(board_id), now)
+        opens_at = board.opens_at if board.opens_at and board.opens_at < now else None
+        return self._save(board.model_copy(update={"closes_at": now, "opens_at": opens_at}))
+
+    def delete_board(self, board_id: str) -> BoardView:
+        """Delete a named board softly: it disappears from lists, pushes and pulls, and
+        ``restore_board`` brings it back whole."""
+        board = self._named(board_id).board
+        return self._save(board.model_copy(update={"deleted_at": self.clock()}))
+
+    def restore_board(self, board_id: str) -> BoardView:
+        stored = self.store.get_board(board_id)
+        if stored is None:
+            raise BoardNotFound(f"no board {board_id!r}")
+        return self._save(stored.board.model_copy(update={"deleted_at": None}))
+
+    def _named(self, board_id: str) -> StoredBoard:
+        stored = self._require_board(board_id)
+        if stored.board.kind != "named":
+            raise BoardLocked(f"{board_id!r} is a track's default board: it keeps the default "
+                              "rules and cannot be changed; create a named board for your race")
+        return stored
+
+    def _save(self, board: Board, only_if_empty: bool = False) -> BoardView:
+        try:
+            stored = self.store.update_board(board, only_if_empty=only_if_empty)
+        except BoardHasEntries:
+            raise BoardLocked(_LOCKED.format(board.board_id)) from None
+        except KeyError:
+            raise BoardNotFound(f"no board {board.board_id!r}") from None
+        return _board_view(stored, self.clock())
+
+    # ---- export and import ----------------------------------------------------------------
+
+    def export_page(self, board_id: str, cursor: str | None = None) -> ExportPage:
+        """One page of the board's export: the board, then its entries in rank order, then
+        every submission with its record. Deleted boards export too."""
+        stored = self.store.get_board(board_id)
+        if stored is None:
+            raise BoardNotFound(f"no board {board_id!r}")
+        part, after = _decode_export_cursor(cursor) if cursor else ("entries", None)
+        lines: list[ExportLine] = []
+        if cursor is None:
+            lines.append(ExportedBoard(exported_at=self.clock(), board=stored.board))
+        if part == "entries":
+            entries = self.store.top(board_id, EXPORT_ENTRIES, after)
+            lines.extend(ExportedEntry(entry=entry) for entry in entries)
+            more = len(entries) == EXPORT_ENTRIES
+            next_cursor = _export_cursor("entries", entries[-1].rank_key) if more else (
+                _export_cursor("submissions", None))
+            return ExportPage(lines=lines, next_cursor=next_cursor)
+        page = self.store.submissions(board_id, after, EXPORT_SUBMISSIONS)
+        lines.extend(ExportedSubmission(submission=s, record=r) for s, r in page.submissions)
+        return ExportPage(lines=lines,
+                          next_cursor=_export_cursor("submissions", page.after) if page.after else None)
+
+    def import_board(self, board: Board) -> tuple[BoardView, bool]:
+        """Create the exported board unless a board with its id exists (then that board's own
+        settings stay). Returns the board and whether it was created."""
+        now = self.clock()
+        expected = default_board_id(board.track, board.direction, board.race_type)
+        kind = "default" if board.board_id == expected else "named"
+        if kind == "named" and not re.match(BOARD_ID_PATTERN, board.board_id):
+            raise InvalidQuery(f"{board.board_id!r} is not a board id: letters, digits, _ - .")
+        board = board.model_copy(update={"kind": kind, "deleted_at": None})
+        existing = self.store.get_board(board.board_id)
+        if existing is not None:
+            self._live(board.board_id, existing)
+            return _board_view(existing, now), False
+        stored = self.store.create_board(board)
+        return _board_view(stored, now), stored.board == board
+
+    def import_submission(self, board_id: str, item: ImportedSubmission) -> ImportReceipt:
+        """Replay one exported submission with its first submission time, scored by this
+        board's rules; the window and limits do not apply. Importing twice changes nothing."""
+        board = self._require_board(board_id).board
+        record = item.record
+        _check_belongs(record, board)
+        submission, entry = _scored(record, board, item.submitted_at)
+        outcome = self.store.record_submission(submission, record, entry)
+        if not outcome.duplicate and self.archive is not None:
+            self.archive.put(board_id, record)
+        return ImportReceipt(status="duplicate" if outcome.duplicate else "created",
+                             board_id=board_id, submission_id=record.submission_id)
+
+
+_LOCKED = ("{!r} has entries: its track, timing method and minimum laps can no longer change "
+           "(create a new board, or export it and import into one with the new rules)")
+EXPORT_ENTRIES = 500
+EXPORT_SUBMISSIONS = 25  # with their records, up to 64 KiB each: a page stays under 2 MB
+
+
+def is_default_board_id(board_id: str) -> bool:
+    """Whether the id is the default board of a catalog track (for any direction and race)."""
+    catalog = default_catalog()
+    for race_suffix in _RACE_SUFFIX.values():
+        for direction in ("_cw", ""):
+            suffix = direction + race_suffix
+            base = board_id[: len(board_id) - len(suffix)] if suffix else board_id
+            if board_id.endswith(suffix) and base and catalog.get(base) is not None:
+                return True
+    return False
+
+
+def _scored(record: Record, board: Board, at: datetime) -> tuple[Submission, Entry]:
+    """The submission and the entry a record makes on a board, as of ``at``."""
+    score = ranking.score_record(record, board.rules)
+    key = racer_key(record.racer)
+    score_key = ranking.score_key(score)
+    submission = Submission(
+        board_id=board.board_id, racer=record.racer, racer_key=key,
+        submission_id=record.submission_id, model_name=record.model_name,
+        submitted_at=at, score=score, score_key=score_key,
+    )
+    entry = Entry(
+        board_id=board.board_id, racer=record.racer, racer_key=key,
+        model_name=record.model_name, submission_id=record.submission_id,
+        achieved_at=at, score=score, design=_design(record), score_key=score_key,
+        rank_key=ranking.rank_key(score_key, at, key),
+    )
+    return submission, entry
+
+
+def _check_open(board: Board, now: datetime) -> None:
+    status = board.status(now)
+    if status is BoardStatus.UPCOMING:
+        raise BoardClosed(f"{board.board_id!r} is not open yet: it opens at {_when(board.opens_at)}")
+    if status is BoardStatus.CLOSED:
+        raise BoardClosed(f"{board.board_id!r} is closed: it closed at {_when(board.closes_at)}")
+
+
+def _check_not_deleted(board: Board) -> None:
+    if board.deleted_at is not None:
+        raise BoardNotFound(f"board {board.board_id!r} was deleted (an organiser can bring it "
+                            f"back with `drboard board restore {board.board_id}`)")
+
+
+def _limit_error(board: Board, racer: str, tally: RacerTally, now: datetime) -> DomainError:
+    cap = board.max_submissions
+    if cap is not None and tally.submissions >= cap:
+        return SubmissionLimitReached(
+            f"{racer} has made all {cap} submissions {board.board_id!r} allows")
+    last = tally.last_submitted_at or now
+    ready = last + timedelta(seconds=board.cooldown_s)
+    wait = max(1, math.ceil((ready - now).total_seconds()))
+    return TooSoon(f"{board.board_id!r} takes one submission every {_duration(board.cooldown_s)} "
+                   f"per racer: {racer} may submit again at {_when(ready)} (in {_duration(wait)})",
+                   wait)
+
+
+def _when(moment: datetime | None) -> str:
+    return moment.astimezone(UTC).strftime("%Y-%m-%d %H:%M:%S UTC") if moment else "?"
+
+
+def _duration(seconds: int) -> str:
+    minutes, secs = divmod(seconds, 60)
+    hours, minutes = divmod(minutes, 60)
+    parts = [f"{hours} h" if hours else "", f"{minutes} min" if minutes else "",
+             f"{secs} s" if secs else ""]
+    return " ".join(p for p in parts if p) or "0 s"
+
+
+def _spec_track(spec: BoardSpec) -> tuple[str, Literal["cw", "ccw"] | None]:
+    if spec.custom_track:
+        return spec.track, "cw" if spec.clockwise else None
+    try:
+        resolved = default_catalog().resolve(spec.track)
+    except UnknownTrackError as error:
+        raise InvalidQuery(f"{error} (a track of your own: set custom_track)") from None
+    clockwise = spec.clockwise or resolved.direction == "cw"
+    return resolved.track_id, "cw" if clockwise else None
+
+
+def _valid_board(**fields: Any) -> Board:
+    try:
+        return Board.model_validate(fields)
+    except ValidationError as error:
+        problems = [{"loc": field_path(e["loc"]) or "board", "msg": e["msg"].removeprefix(
+            "Value error, "), "type": e["type"]} for e in error.errors()]
+        raise InvalidQuery(problems[0]["msg"] if len(problems) == 1 else "invalid board",
+                           detail=problems) from None
+
+
+def _export_cursor(part: str, after: str | None) -> str:
+    raw = json.dumps([part, after])
+    return base64.urlsafe_b64encode(raw.encode()).decode().rstrip("=")
+
+
+def _decode_export_cursor(text: str) -> tuple[str, str | None]:
+    if len(text) > MAX_CURSOR_CHARS:
+        raise InvalidQuery("the cursor is not one this board gave out")
+    try:
+        raw = base64.urlsafe_b64decode(text + "=" * (-len(text) % 4))
+        part, after = json.loads(raw)
+        if part not in ("entries", "submissions") or not (after is None or isinstance(after, str)):
+            raise ValueError
+    except (ValueError, TypeError, RecursionError, binascii.Error, UnicodeDecodeError):
+        raise InvalidQuery("the cursor is not one this board gave out") from None
+    return part, after
 
 
 def _check_belongs(record: Record, board: Board) -> None:
@@ -253,18 +596,25 @@ def _design(record: Record) -> Design:
     )
 
 
-def _board_view(stored: StoredBoard) -> BoardView:
+def _board_view(stored: StoredBoard, now: datetime) -> BoardView:
     board = stored.board
     track = default_catalog().get(board.track)
     return BoardView(
         board_id=board.board_id,
+        kind=board.kind,
+        title=board.title,
+        description=board.description,
         track=board.track,
         track_name=track.display_name if track else board.track,
         direction=board.direction,
         race_type=board.race_type,
         method=board.rules.method,
         min_laps=board.rules.min_laps,
-        title=board.title,
+        status=board.status(now),
+        opens_at=board.opens_at,
+        closes_at=board.closes_at,
+        cooldown_s=board.cooldown_s,
+        max_submissions=board.max_submissions,
         participants=stored.participants,
     )
 

@@ -6,12 +6,29 @@ from typing import NamedTuple, Protocol
 
 from drboard_assembler.record import Record
 
-from ..models import Board, Entry, Submission, WriteOutcome
+from ..models import Board, Entry, RacerTally, Submission, SubmissionLimits, WriteOutcome
 
 
 class StoredBoard(NamedTuple):
     board: Board
     participants: int
+
+
+class LimitReached(Exception):
+    """A push was refused by the board's submission limits; nothing was written."""
+
+    def __init__(self, tally: RacerTally) -> None:
+        super().__init__(f"{tally.submissions} submissions, the last at {tally.last_submitted_at}")
+        self.tally = tally
+
+
+class BoardHasEntries(Exception):
+    """A change that would rescore entries was refused: the board has entries."""
+
+
+class SubmissionPage(NamedTuple):
+    submissions: list[tuple[Submission, Record]]
+    after: str | None  # where the next page starts; None on the last page
 
 
 class BoardStore(Protocol):
@@ -21,17 +38,39 @@ class BoardStore(Protocol):
     def create_board(self, board: Board) -> StoredBoard:
         """Create the board unless it exists; return what is stored."""
 
-    def list_boards(self) -> list[StoredBoard]:
-        """Every board, ordered by id."""
+    def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
+        """Replace an existing board's settings (its id stays). With ``only_if_empty``, raise
+        BoardHasEntries when the board has any entry."""
 
-    def record_submission(self, submission: Submission, record: Record,
-                          entry: Entry) -> WriteOutcome:
+    def list_boards(self) -> list[StoredBoard]:
+        """Every board, deleted ones included, ordered by id."""
+
+    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+                          limits: SubmissionLimits | None = None) -> WriteOutcome:
         """Atomically: store the submission unless its id is already on the board (a duplicate,
-        which changes nothing), and make ``entry`` the racer's entry if it has a strictly lower
-        score key than the current one. Concurrent calls never lose a submission or a best."""
+        which changes nothing and is never refused), and make ``entry`` the racer's entry if it
+        has a strictly lower rank key than the current one (a better score, or an equal score
+        achieved earlier). With ``limits``, a new submission is refused with LimitReached, and
+        nothing written, when the racer's last one is under ``cooldown_s`` old or they have
+        reached ``max_submissions``. Concurrent calls never lose a submission or a best, and
+        never exceed a limit."""
+
+    def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
+        """One submission of the racer on the board."""
+
+    def tally(self, board_id: str, racer_key: str) -> RacerTally:
+        """How many submissions the racer made on the board, and when the last one was."""
+
+    def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        """Up to ``limit`` of the board's submissions with their records, in a stable order,
+        starting after the page token ``after``."""
 
     def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
         """Up to ``limit`` entries in rank-key order, starting after the rank key ``after``."""
+
+    def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
+        """The board and its first ``limit`` entries (what most reads want), in as few reads
+        as the store can."""
 
     def get_entry(self, board_id: str, racer_key: str) -> Entry | None:
         """The racer's entry on the board."""

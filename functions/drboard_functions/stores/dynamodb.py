@@ -3,19 +3,23 @@
 Items of a board share its partition (``board``); the sort key ``sk`` tells them apart:
 
 - ``#BOARD``: the board (its JSON in ``data``, ``participants``, and ``board_kind="board"`` for
-  the sparse ``boards`` index that lists boards);
+  the sparse ``boards`` index that lists boards). Its ``rank_key`` is ``#BOARD`` too, which sorts
+  before every entry's, so one Query of ``by_rank`` reads the board and its first page together;
 - ``R#<racer_key>``: a racer's entry, their best (``data``, ``score_key``, and ``rank_key`` for
   the sparse local index ``by_rank``: the top N is one Query reading N items);
+- ``P#<racer_key>``: the racer's tally on the board (``submissions``, ``last_at``), which the
+  board's submission limits are checked against in the push transaction;
 - ``S#<racer_key>#<submission_id>``: one submission, small (``data``, and ``history_racer``/
   ``submitted_at`` for the sparse ``by_racer`` index that gives a racer's history across boards);
 - ``D#<submission_id>``: the submission's full record, zlib-compressed in ``record``. It sits
   apart from the submission because ``get_record`` knows the submission id but not the racer, and
   so that history reads stay small; it carries no index attribute, so no index copies it.
 
-A push is one transaction: the submission (and its record) is put if absent, and the entry put if
-the racer has none (the board's ``participants`` + 1 in the same transaction) or if it is strictly
-better — a ConditionExpression on the stored entry, so concurrent pushes never lose a best. Only
-this module talks to DynamoDB.
+A push is one transaction: the submission (and its record) is put if absent; the racer's tally
+counts it, on condition that the board's limits allow it; and the entry is put if the racer has
+none (the board's ``participants`` + 1 in the same transaction) or if it is strictly better — a
+ConditionExpression on the stored entry, so concurrent pushes never lose a best nor pass a limit.
+Only this module talks to DynamoDB.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import random
 import time
 import zlib
 from collections.abc import Iterator
+from datetime import timedelta
 from typing import TYPE_CHECKING, Any
 
 import boto3
@@ -32,8 +37,8 @@ from drboard_assembler.record import Record
 
 from .. import ranking
 from ..errors import BoardNotFound
-from ..models import Board, Entry, Submission, WriteOutcome
-from .base import StoredBoard
+from ..models import Board, Entry, RacerTally, Submission, SubmissionLimits, WriteOutcome
+from .base import BoardHasEntries, LimitReached, StoredBoard, SubmissionPage
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
@@ -46,11 +51,13 @@ if TYPE_CHECKING:
     Item = dict[str, AttributeValueTypeDef]
 
 BOARD_SK = "#BOARD"
+FIRST_ENTRY = "0"  # every entry's rank key sorts after this, the board's before it
 BOARD_KIND = "board"
 RANK_INDEX = "by_rank"
 RACER_INDEX = "by_racer"
 BOARDS_INDEX = "boards"
 
+BATCH_GET_KEYS = 100
 MAX_ATTEMPTS = 10  # of a push that loses a race with another push of the same racer or board
 BACKOFF_S = 0.01
 MAX_BACKOFF_S = 0.5
@@ -72,13 +79,18 @@ def record_sk(submission_id: str) -> str:
     return f"D#{submission_id}"
 
 
+def tally_sk(racer_key: str) -> str:
+    return f"P#{racer_key}"
+
+
 def _s(value: str) -> AttributeValueTypeDef:
     return {"S": value}
 
 
 def board_item(board: Board) -> Item:
     return {"board": _s(board.board_id), "sk": _s(BOARD_SK), "board_kind": _s(BOARD_KIND),
-            "data": _s(board.model_dump_json()), "participants": {"N": "0"}}
+            "rank_key": _s(BOARD_SK), "data": _s(board.model_dump_json()),
+            "participants": {"N": "0"}}
 
 
 def entry_item(entry: Entry) -> Item:
@@ -125,6 +137,27 @@ class DynamoDbStore:
         assert stored is not None
         return stored
 
+    def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
+        condition = "attribute_exists(sk)"
+        values: dict[str, AttributeValueTypeDef] = {":data": _s(board.model_dump_json())}
+        if only_if_empty:
+            condition += " AND participants = :none"
+            values[":none"] = {"N": "0"}
+        try:
+            self.client.update_item(
+                TableName=self.table, Key={"board": _s(board.board_id), "sk": _s(BOARD_SK)},
+                UpdateExpression="SET #data = :data", ConditionExpression=condition,
+                ExpressionAttributeNames={"#data": "data"}, ExpressionAttributeValues=values)
+        except ClientError as error:
+            if _code(error) != "ConditionalCheckFailedException":
+                raise
+            if self.get_board(board.board_id) is None:
+                raise KeyError(board.board_id) from None
+            raise BoardHasEntries(board.board_id) from None
+        stored = self.get_board(board.board_id)
+        assert stored is not None
+        return stored
+
     def list_boards(self) -> list[StoredBoard]:
         items = self._query({
             "TableName": self.table, "IndexName": BOARDS_INDEX,
@@ -135,21 +168,23 @@ class DynamoDbStore:
 
     # ---- submissions ----------------------------------------------------------------------
 
-    def record_submission(self, submission: Submission, record: Record,
-                          entry: Entry) -> WriteOutcome:
+    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+                          limits: SubmissionLimits | None = None) -> WriteOutcome:
         board_id, key = entry.board_id, entry.racer_key
-        # Cancellation reasons come back in this order: 0 submission, 1 record, 2 entry, 3 board.
+        # Cancellation reasons come back in this order: 0 submission, 1 record, 2 tally,
+        # 3 entry, 4 board.
         stored: list[TransactWriteItemTypeDef] = [
             {"Put": {"TableName": self.table, "Item": submission_item(submission),
                      "ConditionExpression": "attribute_not_exists(sk)"}},
             {"Put": {"TableName": self.table, "Item": record_item(board_id, record)}},
+            {"Update": self._count_submission(submission, limits)},
         ]
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 _backoff(attempt)
             current = self.get_entry(board_id, key)
             items = list(stored)
-            improves = current is None or entry.score_key < current.score_key
+            improves = current is None or entry.rank_key < current.rank_key
             if current is None:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
                                       "ConditionExpression": "attribute_not_exists(sk)"}})
@@ -162,8 +197,8 @@ class DynamoDbStore:
                 }})
             elif improves:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
-                                      "ConditionExpression": "score_key > :new",
-                                      "ExpressionAttributeValues": {":new": _s(entry.score_key)}}})
+                                      "ConditionExpression": "rank_key > :new",
+                                      "ExpressionAttributeValues": {":new": _s(entry.rank_key)}}})
             # else: not better. The entry stays as it is (entries only ever improve).
             try:
                 self.client.transact_write_items(TransactItems=items)
@@ -173,15 +208,59 @@ class DynamoDbStore:
                 reasons = _cancellation_codes(error)
                 if reasons[:1] == ["ConditionalCheckFailed"]:
                     return self._duplicate(board_id, key)
-                if reasons[3:4] == ["ConditionalCheckFailed"]:
+                if reasons[2:3] == ["ConditionalCheckFailed"]:
+                    raise LimitReached(self.tally(board_id, key)) from None
+                if reasons[4:5] == ["ConditionalCheckFailed"]:
                     raise BoardNotFound(f"no board {board_id!r}") from None
                 if not set(reasons) & {"ConditionalCheckFailed", "TransactionConflict"}:
                     raise
                 continue  # another push changed the entry or the board meanwhile: look again
+            if limits is None:
+                self._advance_last_submitted(submission)
             if improves or current is None:
                 return WriteOutcome(duplicate=False, improved=True, entry=entry)
             return WriteOutcome(duplicate=False, improved=False, entry=current)
         raise StoreContention(f"gave up pushing to {board_id!r} after {MAX_ATTEMPTS} attempts")
+
+    def _count_submission(self, submission: Submission,
+                          limits: SubmissionLimits | None) -> Any:
+        """The tally's update, conditioned on the limits: the racer's last submission is old
+        enough and they have made fewer than the maximum (a first submission always passes)."""
+        update: dict[str, Any] = {
+            "TableName": self.table,
+            "Key": {"board": _s(submission.board_id), "sk": _s(tally_sk(submission.racer_key))},
+            "UpdateExpression": "SET submissions = if_not_exists(submissions, :zero) + :one",
+            "ExpressionAttributeValues": {":zero": {"N": "0"}, ":one": {"N": "1"}},
+        }
+        if limits is None:  # an import: the last time is moved forward after the transaction
+            return update
+        values = update["ExpressionAttributeValues"]
+        update["UpdateExpression"] += ", last_at = :at"
+        values[":at"] = _s(ranking.timestamp(submission.submitted_at))
+        checks = []
+        if limits.max_submissions is not None:
+            checks.append("submissions < :max")
+            values[":max"] = {"N": str(limits.max_submissions)}
+        if limits.cooldown_s:
+            checks.append("(attribute_not_exists(last_at) OR last_at <= :cutoff)")
+            cutoff = limits.now - timedelta(seconds=limits.cooldown_s)
+            values[":cutoff"] = _s(ranking.timestamp(cutoff))
+        if checks:
+            update["ConditionExpression"] = "attribute_not_exists(sk) OR (" + " AND ".join(checks) + ")"
+        return update
+
+    def _advance_last_submitted(self, submission: Submission) -> None:
+        at = ranking.timestamp(submission.submitted_at)
+        try:
+            self.client.update_item(
+                TableName=self.table,
+                Key={"board": _s(submission.board_id), "sk": _s(tally_sk(submission.racer_key))},
+                UpdateExpression="SET last_at = :at",
+                ConditionExpression="attribute_not_exists(last_at) OR last_at < :at",
+                ExpressionAttributeValues={":at": _s(at)})
+        except ClientError as error:
+            if _code(error) != "ConditionalCheckFailedException":
+                raise
 
     def _duplicate(self, board_id: str, racer_key: str) -> WriteOutcome:
         current = self.get_entry(board_id, racer_key)
@@ -190,12 +269,69 @@ class DynamoDbStore:
 
     # ---- reads ----------------------------------------------------------------------------
 
-    def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
-        condition = "board = :board"
-        values: dict[str, AttributeValueTypeDef] = {":board": _s(board_id)}
+    def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
+        item = self._get(board_id, submission_sk(racer_key, submission_id))
+        return Submission.model_validate_json(item["data"]["S"]) if item else None
+
+    def tally(self, board_id: str, racer_key: str) -> RacerTally:
+        item = self._get(board_id, tally_sk(racer_key))
+        if not item:
+            return RacerTally()
+        last = item.get("last_at")
+        return RacerTally(submissions=int(item["submissions"]["N"]),
+                          last_submitted_at=ranking.parse_timestamp(last["S"]) if last else None)
+
+    def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "ConsistentRead": True, "Limit": limit,
+            "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":board": _s(board_id), ":prefix": _s("S#")},
+            "ProjectionExpression": "sk, #data", "ExpressionAttributeNames": {"#data": "data"},
+        }
         if after is not None:
-            condition += " AND rank_key > :after"
-            values[":after"] = _s(after)
+            request["ExclusiveStartKey"] = {"board": _s(board_id), "sk": _s(after)}
+        page = self.client.query(**request)
+        submissions = [Submission.model_validate_json(item["data"]["S"]) for item in page["Items"]]
+        records = self._records(board_id, [s.submission_id for s in submissions])
+        pairs = [(s, records[s.submission_id]) for s in submissions if s.submission_id in records]
+        more = page.get("LastEvaluatedKey") and page["Items"]
+        return SubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
+
+    def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, Record]:
+        records: dict[str, Record] = {}
+        keys = [{"board": _s(board_id), "sk": _s(record_sk(i))} for i in dict.fromkeys(submission_ids)]
+        for start in range(0, len(keys), BATCH_GET_KEYS):
+            pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
+                                         "ConsistentRead": True}}
+            attempt = 0
+            while pending:
+                if attempt:
+                    _backoff(attempt)
+                answer = self.client.batch_get_item(RequestItems=pending)
+                for item in answer["Responses"].get(self.table, []):
+                    record = Record.model_validate_json(zlib.decompress(item["record"]["B"]))
+                    records[record.submission_id] = record
+                pending = answer.get("UnprocessedKeys") or None
+                attempt += 1
+        return records
+
+    def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :board",
+            "ExpressionAttributeValues": {":board": _s(board_id)},
+            "ProjectionExpression": "sk, #data, participants",
+            "ExpressionAttributeNames": {"#data": "data"},
+        }
+        items = self._query(request, limit=limit + 1)
+        if not items or items[0]["sk"]["S"] != BOARD_SK:
+            return None, []
+        return _board(items[0]), [Entry.model_validate_json(i["data"]["S"]) for i in items[1:]]
+
+    def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
+        condition = "board = :board AND rank_key > :after"
+        values: dict[str, AttributeValueTypeDef] = {
+            ":board": _s(board_id), ":after": _s(FIRST_ENTRY if after is None else after)}
         request: QueryInputTypeDef = {
             "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
             "KeyConditionExpression": condition, "ExpressionAttributeValues": values,
@@ -213,8 +349,10 @@ class DynamoDbStore:
         # exactly the entries with a lower score key.
         request: QueryInputTypeDef = {
             "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
-            "Select": "COUNT", "KeyConditionExpression": "board = :board AND rank_key < :key",
-            "ExpressionAttributeValues": {":board": _s(board_id), ":key": _s(score_key)},
+            "Select": "COUNT",
+            "KeyConditionExpression": "board = :board AND rank_key BETWEEN :first AND :key",
+            "ExpressionAttributeValues": {":board": _s(board_id), ":first": _s(FIRST_ENTRY),
+                                          ":key": _s(score_key)},
         }
         return sum(page["Count"] for page in self._pages(request))
 

@@ -14,8 +14,9 @@ from pathlib import Path
 
 from drboard_assembler.record import Record
 
-from ..models import Board, Entry, Submission, WriteOutcome
-from .base import StoredBoard
+from .. import ranking
+from ..models import Board, Entry, RacerTally, Submission, SubmissionLimits, WriteOutcome
+from .base import BoardHasEntries, LimitReached, StoredBoard, SubmissionPage
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
@@ -103,26 +104,41 @@ class SqliteStore:
         assert stored is not None
         return stored
 
+    def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
+        with self._write() as db:
+            stored = self.get_board(board.board_id)
+            if stored is None:
+                raise KeyError(board.board_id)
+            if only_if_empty and stored.participants:
+                raise BoardHasEntries(board.board_id)
+            db.execute("UPDATE boards SET board = ? WHERE board_id = ?",
+                       (board.model_dump_json(), board.board_id))
+        updated = self.get_board(board.board_id)
+        assert updated is not None
+        return updated
+
     def list_boards(self) -> list[StoredBoard]:
         rows = self._db.execute("SELECT board, participants FROM boards ORDER BY board_id")
         return [_board(row) for row in rows]
 
     # ---- submissions ----------------------------------------------------------------------
 
-    def record_submission(self, submission: Submission, record: Record,
-                          entry: Entry) -> WriteOutcome:
+    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+                          limits: SubmissionLimits | None = None) -> WriteOutcome:
         with self._write() as db:
-            inserted = db.execute(
-                "INSERT OR IGNORE INTO submissions VALUES (?, ?, ?, ?, ?, ?)",
-                (submission.board_id, submission.submission_id, submission.racer_key,
-                 submission.submitted_at.isoformat(), submission.model_dump_json(),
-                 record.model_dump_json()),
-            ).rowcount
             current = self._entry(db, entry.board_id, entry.racer_key)
-            if not inserted:
+            if self._has_submission(db, submission.board_id, submission.submission_id):
                 assert current is not None, "a stored submission always has an entry"
                 return WriteOutcome(duplicate=True, improved=False, entry=current)
-            if current is not None and current.score_key <= entry.score_key:
+            if limits is not None:
+                _check_limits(self._tally(db, submission.board_id, submission.racer_key), limits)
+            db.execute(
+                "INSERT INTO submissions VALUES (?, ?, ?, ?, ?, ?)",
+                (submission.board_id, submission.submission_id, submission.racer_key,
+                 ranking.timestamp(submission.submitted_at), submission.model_dump_json(),
+                 record.model_dump_json()),
+            )
+            if current is not None and current.rank_key <= entry.rank_key:
                 return WriteOutcome(duplicate=False, improved=False, entry=current)
             db.execute(
                 "INSERT OR REPLACE INTO entries VALUES (?, ?, ?, ?, ?)",
@@ -133,6 +149,41 @@ class SqliteStore:
                 db.execute("UPDATE boards SET participants = participants + 1 WHERE board_id = ?",
                            (entry.board_id,))
             return WriteOutcome(duplicate=False, improved=True, entry=entry)
+
+    @staticmethod
+    def _has_submission(db: sqlite3.Connection, board_id: str, submission_id: str) -> bool:
+        return db.execute("SELECT 1 FROM submissions WHERE board_id = ? AND submission_id = ?",
+                          (board_id, submission_id)).fetchone() is not None
+
+    def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
+        row = self._db.execute(
+            "SELECT submission FROM submissions WHERE board_id = ? AND submission_id = ? "
+            "AND racer_key = ?", (board_id, submission_id, racer_key)).fetchone()
+        return Submission.model_validate_json(row[0]) if row else None
+
+    def tally(self, board_id: str, racer_key: str) -> RacerTally:
+        return self._tally(self._db, board_id, racer_key)
+
+    @staticmethod
+    def _tally(db: sqlite3.Connection, board_id: str, racer_key: str) -> RacerTally:
+        count, last = db.execute(
+            "SELECT COUNT(*), MAX(submitted_at) FROM submissions WHERE racer_key = ? AND board_id = ?",
+            (racer_key, board_id)).fetchone()
+        return RacerTally(submissions=int(count),
+                          last_submitted_at=ranking.parse_timestamp(last) if last else None)
+
+    def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        rows = self._db.execute(
+            "SELECT submission_id, submission, record FROM submissions "
+            "WHERE board_id = ? AND submission_id > ? ORDER BY submission_id LIMIT ?",
+            (board_id, after or "", limit)).fetchall()
+        page = [(Submission.model_validate_json(row[1]), Record.model_validate_json(row[2]))
+                for row in rows]
+        return SubmissionPage(page, rows[-1][0] if len(rows) == limit else None)
+
+    def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
+        stored = self.get_board(board_id)
+        return stored, (self.top(board_id, limit) if stored else [])
 
     def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
         rows = self._db.execute(
@@ -176,6 +227,14 @@ class SqliteStore:
             "SELECT record FROM submissions WHERE board_id = ? AND submission_id = ?",
             (board_id, submission_id)).fetchone()
         return Record.model_validate_json(row[0]) if row else None
+
+
+def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
+    if limits.max_submissions is not None and tally.submissions >= limits.max_submissions:
+        raise LimitReached(tally)
+    last = tally.last_submitted_at
+    if limits.cooldown_s and last is not None and (limits.now - last).total_seconds() < limits.cooldown_s:
+        raise LimitReached(tally)
 
 
 def _board(row: tuple[str, int]) -> StoredBoard:
