@@ -21,9 +21,19 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from drboard_assembler.record import Record
 from drboard_functions import ranking
-from drboard_functions.models import Board, BoardRules, Design, Entry, Submission, WriteOutcome
+from drboard_functions.models import (
+    Board,
+    BoardRules,
+    Design,
+    Entry,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    TimingMethod,
+    WriteOutcome,
+)
 from drboard_functions.service import racer_key
-from drboard_functions.stores.base import BoardStore
+from drboard_functions.stores.base import BoardHasEntries, BoardStore, LimitReached
 
 from tests.recordkit import LapSpec, make_record
 
@@ -68,12 +78,21 @@ def write_for(record: Record, board: Board, when: datetime) -> tuple[Submission,
     return submission, entry
 
 
-def submit(store: BoardStore, record: Record, when: datetime, board: Board | None = None) -> WriteOutcome:
+def submit(store: BoardStore, record: Record, when: datetime, board: Board | None = None,
+           limits: SubmissionLimits | None = None) -> WriteOutcome:
     board = board or make_board()
     if store.get_board(board.board_id) is None:
         store.create_board(board)
     submission, entry = write_for(record, board, when)
-    return store.record_submission(submission, record, entry)
+    return store.record_submission(submission, record, entry, limits)
+
+
+def cooldown(seconds: int, now: datetime) -> SubmissionLimits:
+    return SubmissionLimits(now=now, cooldown_s=seconds)
+
+
+def at_most(submissions: int, now: datetime) -> SubmissionLimits:
+    return SubmissionLimits(now=now, max_submissions=submissions)
 
 
 def lap(ms: int) -> list[LapSpec]:
@@ -338,3 +357,145 @@ class StoreContract:
         assert stored is not None and stored.submission_id == record.submission_id
         assert store.get_record(TRACK, "0" * 64) is None
         assert store.get_record("nowhere", record.submission_id) is None
+
+    # ---- reading one submission, and paging through them all --------------------------------
+
+    def test_get_submission_finds_the_racers_own_submission(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(12000))
+        submit(store, record, at(1))
+        found = store.get_submission(TRACK, "ada", record.submission_id)
+        assert found is not None and (found.racer, found.submitted_at) == ("Ada", at(1))
+        assert store.get_submission(TRACK, "bob", record.submission_id) is None
+        assert store.get_submission("nowhere", "ada", record.submission_id) is None
+
+    def test_submissions_pages_through_every_submission_with_its_record(self, store: BoardStore) -> None:
+        records = [make_record(f"R{n % 4}", lap(12000 + n)) for n in range(11)]
+        for n, record in enumerate(records):
+            submit(store, record, at(n))
+        submit(store, make_record("Other"), at(20), make_board("Oval_track", track="Oval_track"))
+        seen: list[str] = []
+        after = None
+        pages = 0
+        while True:
+            page = store.submissions(TRACK, after, 4)
+            pages += 1
+            for submission, record in page.submissions:
+                assert record.submission_id == submission.submission_id
+                assert record == next(r for r in records if r.submission_id == submission.submission_id)
+            seen += [s.submission_id for s, _ in page.submissions]
+            if page.after is None:
+                break
+            after = page.after
+        assert sorted(seen) == sorted(r.submission_id for r in records)
+        assert pages in (3, 4)  # 11 in pages of 4; a store may need one empty last page
+        assert store.submissions("nowhere", None, 4).submissions == []
+
+    # ---- submission limits ------------------------------------------------------------------
+
+    def test_tally_counts_a_racers_submissions_on_a_board(self, store: BoardStore) -> None:
+        assert store.tally(TRACK, "ada") == RacerTally()
+        submit(store, make_record("Ada", lap(12000)), at(1))
+        submit(store, make_record("Ada", lap(13000)), at(5))
+        submit(store, make_record("Ada", lap(13000)), at(9))  # a duplicate does not count
+        submit(store, make_record("Bob", lap(13000)), at(7))
+        assert store.tally(TRACK, "ada") == RacerTally(submissions=2, last_submitted_at=at(5))
+
+    def test_a_push_inside_the_cooldown_is_refused_and_writes_nothing(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada", lap(12000)), at(0), limits=cooldown(60, at(0)))
+        faster = make_record("Ada", lap(11000))
+        with pytest.raises(LimitReached) as refused:
+            submit(store, faster, at(59), limits=cooldown(60, at(59)))
+        assert refused.value.tally == RacerTally(submissions=1, last_submitted_at=at(0))
+        assert store.get_submission(TRACK, "ada", faster.submission_id) is None
+        assert [s.submission_id for s in store.history("ada")] == [
+            make_record("Ada", lap(12000)).submission_id]
+        entry = store.get_entry(TRACK, "ada")
+        assert entry is not None and entry.score.time_ms == 12000
+        assert store.tally(TRACK, "ada").submissions == 1
+
+    def test_a_push_after_the_cooldown_is_taken(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada", lap(12000)), at(0), limits=cooldown(60, at(0)))
+        outcome = submit(store, make_record("Ada", lap(11000)), at(60), limits=cooldown(60, at(60)))
+        assert outcome.improved
+        submit(store, make_record("Bob", lap(13000)), at(61), limits=cooldown(60, at(61)))
+
+    def test_the_maximum_of_submissions_is_enforced(self, store: BoardStore) -> None:
+        for n in range(3):
+            submit(store, make_record("Ada", lap(12000 + n)), at(n), limits=at_most(3, at(n)))
+        with pytest.raises(LimitReached) as refused:
+            submit(store, make_record("Ada", lap(10000)), at(9), limits=at_most(3, at(9)))
+        assert refused.value.tally.submissions == 3
+        assert len(store.history("ada", TRACK)) == 3
+        submit(store, make_record("Bob", lap(10000)), at(10), limits=at_most(3, at(10)))
+
+    def test_a_duplicate_is_never_refused_by_a_limit(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(12000))
+        submit(store, record, at(0), limits=at_most(1, at(0)))
+        again = submit(store, record, at(1), limits=SubmissionLimits(now=at(1), cooldown_s=600,
+                                                                    max_submissions=1))
+        assert again.duplicate and not again.improved
+        assert store.tally(TRACK, "ada").submissions == 1
+
+    def test_limits_are_per_board(self, store: BoardStore) -> None:
+        oval = make_board("Oval_track", track="Oval_track")
+        submit(store, make_record("Ada", lap(12000)), at(0), limits=at_most(1, at(0)))
+        submit(store, make_record("Ada", lap(12000), track="Oval_track"), at(1), oval,
+               limits=at_most(1, at(1)))
+        assert store.tally("Oval_track", "ada").submissions == 1
+
+    def test_an_unlimited_write_keeps_the_latest_time(self, store: BoardStore) -> None:
+        # An import replays submissions in any order; the tally still knows the latest one.
+        submit(store, make_record("Ada", lap(12000)), at(50))
+        submit(store, make_record("Ada", lap(13000)), at(10))
+        assert store.tally(TRACK, "ada") == RacerTally(submissions=2, last_submitted_at=at(50))
+
+    # ---- replays (imports): the best is the same in any order ----------------------------------
+
+    def test_an_equal_score_achieved_earlier_becomes_the_entry(self, store: BoardStore) -> None:
+        later = make_record("Ada", lap(12000), model="later")
+        earlier = make_record("Ada", lap(12000), model="earlier")
+        submit(store, later, at(50))
+        outcome = submit(store, earlier, at(10))
+        assert outcome.improved
+        entry = store.get_entry(TRACK, "ada")
+        assert entry is not None and entry.submission_id == earlier.submission_id
+
+    # ---- changing a board -------------------------------------------------------------------
+
+    def test_update_board_replaces_its_settings(self, store: BoardStore) -> None:
+        store.create_board(make_board())
+        submit(store, make_record("Ada"), at(1))
+        changed = make_board(title="Renamed").model_copy(update={"cooldown_s": 1800})
+        stored = store.update_board(changed)
+        assert stored.board == changed and stored.participants == 1
+        assert store.get_board(TRACK) == stored
+        assert [s.board for s in store.list_boards()] == [changed]
+        assert [e.racer for e in store.top(TRACK, 10)] == ["Ada"]
+
+    def test_update_board_only_if_empty(self, store: BoardStore) -> None:
+        store.create_board(make_board())
+        rescored = make_board().model_copy(update={"rules": BoardRules(method=TimingMethod.TOTAL_TIME)})
+        assert store.update_board(rescored, only_if_empty=True).board == rescored
+        submit(store, make_record("Ada"), at(1), rescored)
+        with pytest.raises(BoardHasEntries):
+            store.update_board(make_board(), only_if_empty=True)
+        stored = store.get_board(TRACK)
+        assert stored is not None and stored.board == rescored
+
+    def test_update_of_an_unknown_board_is_a_key_error(self, store: BoardStore) -> None:
+        with pytest.raises(KeyError):
+            store.update_board(make_board("nowhere"))
+        assert store.get_board("nowhere") is None
+
+    # ---- the front page ---------------------------------------------------------------------
+
+    def test_front_page_is_the_board_and_its_first_entries(self, store: BoardStore) -> None:
+        for n, racer in enumerate(["Cy", "Ada", "Bob"]):
+            submit(store, make_record(racer, lap(12000 - n * 100)), at(n))
+        stored, entries = store.front_page(TRACK, 2)
+        assert stored == store.get_board(TRACK)
+        assert [e.racer for e in entries] == ["Bob", "Ada"]
+        assert store.front_page("nowhere", 2) == (None, [])
+        store.create_board(make_board("Oval_track", track="Oval_track"))
+        empty, none = store.front_page("Oval_track", 5)
+        assert empty is not None and empty.participants == 0 and none == []

@@ -246,7 +246,8 @@ class DynamoDbStore:
             cutoff = limits.now - timedelta(seconds=limits.cooldown_s)
             values[":cutoff"] = _s(ranking.timestamp(cutoff))
         if checks:
-            update["ConditionExpression"] = "attribute_not_exists(sk) OR (" + " AND ".join(checks) + ")"
+            allowed = checks[0] if len(checks) == 1 else "(" + " AND ".join(checks) + ")"
+            update["ConditionExpression"] = f"attribute_not_exists(sk) OR {allowed}"
         return update
 
     def _advance_last_submitted(self, submission: Submission) -> None:
