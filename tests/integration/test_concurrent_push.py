@@ -12,6 +12,8 @@ import multiprocessing
 from pathlib import Path
 from typing import Any
 
+from drboard_functions.errors import SubmissionLimitReached
+from drboard_functions.models import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 
@@ -86,3 +88,38 @@ def test_concurrent_pushes_lose_nothing(tmp_path: Path) -> None:
         assert [e.rank for e in entries] == list(range(1, len(entries) + 1))  # all times differ
     finally:
         store.close()
+
+
+# ---- limits hold across processes -----------------------------------------------------------------
+
+LIMITED = "club-finals"
+
+
+def push_limited(path: str, worker: int, barrier: Any, answers: Any) -> None:
+    service = LeaderboardService(SqliteStore(path))
+    record = make_record(SHARED, [(20_000 - worker * 10, 100)], model=f"w{worker}")
+    barrier.wait(timeout=30)
+    try:
+        answers.put(service.push(record, LIMITED).status)
+    except SubmissionLimitReached:
+        answers.put("refused")
+
+
+def test_the_maximum_of_submissions_holds_across_processes(tmp_path: Path) -> None:
+    path = tmp_path / "board.db"
+    store = SqliteStore(path)
+    LeaderboardService(store).create_board(BoardSpec(
+        board_id=LIMITED, title="Finals", track=TRACK, max_submissions=2))
+    context = multiprocessing.get_context("spawn")
+    barrier, answers = context.Barrier(WORKERS), context.Queue()
+    workers = [context.Process(target=push_limited, args=(str(path), w, barrier, answers))
+               for w in range(WORKERS)]
+    for process in workers:
+        process.start()
+    for process in workers:
+        process.join(timeout=60)
+    assert [p.exitcode for p in workers] == [0] * WORKERS
+    got = sorted(answers.get(timeout=5) for _ in range(WORKERS))
+    assert got == sorted(["created"] * 2 + ["refused"] * (WORKERS - 2))
+    assert len(LeaderboardService(store).history(SHARED, LIMITED)) == 2
+    store.close()

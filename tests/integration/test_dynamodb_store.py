@@ -11,6 +11,8 @@ from typing import Any
 
 import boto3
 import pytest
+from drboard_functions.errors import SubmissionLimitReached, TooSoon
+from drboard_functions.models import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
 from moto import mock_aws
@@ -148,3 +150,47 @@ def test_top_of_a_big_board_reads_about_limit_items(dynamodb_local: DynamoDbLoca
     following = LeaderboardService(store).board_page(TRACK, limit=10, cursor=page.next_cursor)
     assert [e.racer for e in following.entries] == [e.racer for e in everything[10:20]]
     assert sum(scanned) <= 11 + 1  # the page's ten, and the leader (for gaps) on a later page
+
+
+# ---- limits under concurrent pushes -------------------------------------------------------------
+
+LIMITED = "club-finals"
+
+
+def race_pushes(services: list[LeaderboardService], records: list[Any], board_id: str) -> list[str]:
+    """Push every record at once, one thread and one service each; what each push answered."""
+    barrier = threading.Barrier(len(records))
+    answers: list[str] = []
+
+    def push(n: int) -> None:
+        barrier.wait(timeout=30)
+        try:
+            answers.append(services[n].push(records[n], board_id).status)
+        except (TooSoon, SubmissionLimitReached) as refused:
+            answers.append(type(refused).__name__)
+
+    threads = [threading.Thread(target=push, args=(n,)) for n in range(len(records))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=120)
+    return answers
+
+
+@pytest.mark.parametrize(("settings", "allowed", "refusal"), [
+    ({"max_submissions": 3}, 3, "SubmissionLimitReached"),
+    ({"cooldown_s": 1800}, 1, "TooSoon"),
+])
+def test_limits_hold_under_concurrent_pushes(dynamodb_local: DynamoDbLocal, local_table: str,
+                                             settings: dict[str, int], allowed: int,
+                                             refusal: str) -> None:
+    services = [LeaderboardService(DynamoDbStore(local_table, dynamodb_local.client()))
+                for _ in range(10)]
+    services[0].create_board(BoardSpec.model_validate(
+        {"board_id": LIMITED, "title": "Finals", "track": TRACK} | settings))
+    records = [make_record(SHARED, [(20_000 - n * 10, 100)], model=f"m{n}") for n in range(10)]
+    answers = race_pushes(services, records, LIMITED)
+    assert sorted(answers) == sorted(["created"] * allowed + [refusal] * (10 - allowed))
+    history = services[0].history(SHARED, LIMITED)
+    assert len(history) == allowed
+    assert services[0].status(SHARED, LIMITED).boards[0].submissions == allowed
