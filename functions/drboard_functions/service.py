@@ -353,8 +353,9 @@ class LeaderboardService:
         for name in ("title", "method"):
             if name in given and getattr(changes, name) is None:
                 raise InvalidQuery(f"{name} cannot be cleared")
-        updates = {name: getattr(changes, name) for name in given
-                   if name not in ("method", "min_laps")}
+        cleared = {"description": "", "cooldown_s": 0}  # what null means for the unbounded ones
+        updates = {name: cleared.get(name) if getattr(changes, name) is None else getattr(changes, name)
+                   for name in given if name not in ("method", "min_laps")}
         method = changes.method if "method" in given and changes.method else board.rules.method
         min_laps = changes.min_laps if "min_laps" in given else (
             None if method != board.rules.method else board.rules.min_laps)

@@ -462,3 +462,12 @@ def test_a_bad_export_cursor_is_an_invalid_query(service: LeaderboardService) ->
     service.create_board(spec())
     with pytest.raises(InvalidQuery):
         service.export_page(RACE, "not-a-cursor")
+
+
+def test_null_clears_the_description_cooldown_and_maximum(service: LeaderboardService) -> None:
+    service.create_board(spec(description="Bring snacks", cooldown_s=60, max_submissions=3))
+    view = service.update_board(RACE, BoardChanges.model_validate(
+        {"description": None, "cooldown_s": None, "max_submissions": None}))
+    assert (view.description, view.cooldown_s, view.max_submissions) == ("", 0, None)
+    with pytest.raises(InvalidQuery, match="title cannot be cleared"):
+        service.update_board(RACE, BoardChanges.model_validate({"title": None}))
