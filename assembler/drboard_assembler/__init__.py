@@ -13,7 +13,8 @@ from .errors import AssemblyError
 from .record import Record
 
 if TYPE_CHECKING:
-    from .assembly import Overrides, assemble
+    from .assembly import Overrides, assemble, planned_trials
+    from .layout import evaluation_files
 
 __version__ = "0.1.0"
 
@@ -26,12 +27,18 @@ __all__ = [
     "__version__",
     "assemble",
     "default_catalog",
+    "evaluation_files",
+    "planned_trials",
 ]
 
 
 def __getattr__(name: str) -> Any:
-    if name in ("Overrides", "assemble"):
+    if name in ("Overrides", "assemble", "planned_trials"):
         from . import assembly
 
         return getattr(assembly, name)
+    if name == "evaluation_files":
+        from . import layout
+
+        return layout.evaluation_files
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

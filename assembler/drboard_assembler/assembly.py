@@ -31,15 +31,38 @@ class Overrides:
     custom_track: bool = False
 
 
-def assemble(path: Path, overrides: Overrides | None = None) -> Record:
+def assemble(path: Path, overrides: Overrides | None = None, *,
+             evaluation: str | None = None) -> Record:
+    """Read a run folder (or a .tar.gz of one) into a record.
+
+    ``evaluation`` names one evaluation metrics file, relative to the run folder as
+    :func:`evaluation_files` lists it; the record then holds that evaluation run only, exactly as
+    if the folder's other evaluation metrics files were not there.
+    """
     overrides = overrides or Overrides()
     if is_archive(path):
         with tempfile.TemporaryDirectory(prefix="drboard-") as scratch:
             root = unpack(path, Path(scratch))
-            return _assemble_folder(root, overrides, default_model=_archive_stem(path))
+            return _assemble_folder(root, overrides, _archive_stem(path), evaluation)
     if not path.exists():
         raise AssemblyError(str(path), "", "does not exist")
-    return _assemble_folder(path, overrides, default_model=path.resolve().name)
+    return _assemble_folder(path, overrides, path.resolve().name, evaluation)
+
+
+def planned_trials(path: Path, evaluation: str) -> int | None:
+    """How many laps the evaluation that writes this metrics file will drive: the
+    ``NUMBER_OF_TRIALS`` of the evaluation parameters naming it, or None when none say.
+
+    DeepRacer rewrites an evaluation's metrics file after every lap, so this tells a complete
+    file from one still being written.
+    """
+    files = find_run_files(path)
+    metrics = _only_evaluation(files, evaluation, path.name or str(path))
+    params = [load_params(read_bounded(p, files.name(p), limits.MAX_SMALL_FILE_BYTES), files.name(p))
+              for p in files.params]
+    naming = _params_for(metrics.name, [p for p in params if p.kind == "evaluation"])
+    trials = naming.text("NUMBER_OF_TRIALS") if naming else None
+    return int(trials) if trials and trials.isdigit() else None
 
 
 def _archive_stem(path: Path) -> str:
@@ -67,10 +90,13 @@ class _Reader:
         return data
 
 
-def _assemble_folder(root: Path, overrides: Overrides, default_model: str) -> Record:
+def _assemble_folder(root: Path, overrides: Overrides, default_model: str,
+                     evaluation: str | None) -> Record:
     files = find_run_files(root)
-    reader = _Reader(files)
     where = root.name or str(root)
+    if evaluation is not None:
+        files.evaluation_metrics = [_only_evaluation(files, evaluation, where)]
+    reader = _Reader(files)
 
     metadata_path = shallowest(files.model_metadata, root)
     if metadata_path is None:
@@ -158,6 +184,13 @@ def _assemble_folder(root: Path, overrides: Overrides, default_model: str) -> Re
         raise AssemblyError(where, "record", f"is {size} bytes, over the "
                             f"{limits.MAX_RECORD_BYTES} limit (too many laps or runs)")
     return record
+
+
+def _only_evaluation(files: RunFiles, evaluation: str, where: str) -> Path:
+    for path in files.evaluation_metrics:
+        if files.name(path) == evaluation:
+            return path
+    raise AssemblyError(where, evaluation, "no such evaluation metrics file in the run folder")
 
 
 def _roles(provenance: list[SourceFile], params: list[RunParams]) -> list[SourceFile]:

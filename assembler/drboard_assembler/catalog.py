@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import difflib
 import re
 from dataclasses import dataclass
 from functools import cache
@@ -113,6 +112,8 @@ class TrackCatalog:
         return set()
 
     def closest(self, text: str, count: int = 5) -> list[str]:
+        import difflib  # here: only a refusal needs it, not the requests the functions serve
+
         key = _key(text)
         close = difflib.get_close_matches(key, self._by_key, n=count * 2, cutoff=0.5)
         names: list[str] = []

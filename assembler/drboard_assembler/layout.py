@@ -67,6 +67,14 @@ def find_run_files(root: Path) -> RunFiles:
     return found
 
 
+def evaluation_files(root: Path) -> list[str]:
+    """The run folder's evaluation metrics files, relative to it (``metrics/evaluation/x.json``),
+    in name order: each one is an evaluation run, which ``assemble(root, evaluation=name)``
+    makes a record of on its own."""
+    files = find_run_files(root)
+    return sorted(files.name(path) for path in files.evaluation_metrics)
+
+
 def _inside(path: Path, root: Path) -> bool:
     return path.resolve().is_relative_to(root.resolve())
 

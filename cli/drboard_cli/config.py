@@ -16,6 +16,11 @@ def default_db_path() -> Path:
     return platformdirs.user_data_path(APP) / "board.db"
 
 
+def watch_memory_path() -> Path:
+    """Which evaluations `drboard push --watch` has pushed, so a restart pushes none again."""
+    return platformdirs.user_data_path(APP) / "watched.json"
+
+
 def settings_path() -> Path:
     return platformdirs.user_config_path(APP) / "settings.json"
 

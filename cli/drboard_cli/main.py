@@ -14,11 +14,13 @@ from typing import Any, TypeVar
 
 import click
 from drboard_assembler import AssemblyError, Overrides, Record, assemble
+from drboard_assembler.record import RaceType
 from drboard_functions import display
 from drboard_functions import errors as domain
+from drboard_functions.models import MAX_COOLDOWN_S, TimingMethod
 from rich.console import Console
 
-from . import config, render
+from . import board_options, config, render, transfer
 from .target import BoardClient, local_board
 
 FORMATS = ("table", "json", "csv", "markdown")
@@ -26,7 +28,8 @@ BAD_INPUT = 2
 FAILURE = 1
 
 _BAD_INPUT_ERRORS = (domain.InvalidSubmission, domain.SubmissionTooLarge, domain.BoardMismatch,
-                     domain.InvalidQuery)
+                     domain.InvalidQuery, domain.BoardExists, domain.BoardLocked)
+FORMAT_HELP = "table for people, json for scripts (the README documents its fields)."
 
 T = TypeVar("T")
 
@@ -34,11 +37,17 @@ out = Console(highlight=False)
 err = Console(stderr=True, highlight=False)
 
 
+BoardOpener = Callable[[Path], BoardClient]
+
+
 class Context:
     """Which board the commands talk to: ``--endpoint`` (or DRBOARD_ENDPOINT), else ``--db``,
-    else the endpoint saved by ``drboard configure``, else the embedded board."""
+    else the endpoint saved by ``drboard configure``, else the embedded board, opened by
+    ``open_local`` (tests give one on a fixed clock)."""
 
-    def __init__(self, db: Path | None, endpoint: str | None) -> None:
+    def __init__(self, db: Path | None, endpoint: str | None,
+                 open_local: BoardOpener = local_board) -> None:
+        self.open_local = open_local
         self.explicit_db = db
         self.db = db or config.default_db_path()
         self.endpoint = endpoint or (None if db else config.load_settings().get("endpoint"))
@@ -52,7 +61,7 @@ class Context:
 
                 self._board = HttpBoard(str(self.endpoint))
             else:
-                self._board = local_board(self.db)
+                self._board = self.open_local(self.db)
         return self._board
 
 
@@ -66,10 +75,15 @@ def fail(message: str, code: int) -> None:
 
 @contextmanager
 def edge() -> Iterator[None]:
-    """Map domain errors to one message and an exit code: the CLI's only error handling."""
+    """Map domain errors to one message and an exit code: the CLI's only error handling.
+
+    Bad input (2): a file, a record or a board setting refused, a board id taken, a board that
+    cannot change. Failure (1): anything else, e.g. a closed board, a used-up submission limit or
+    a cooldown (whose message says when to retry), nothing found, the board unreachable.
+    """
     try:
         yield
-    except AssemblyError as error:
+    except (AssemblyError, transfer.BadExportFile) as error:
         fail(_escape(str(error)), BAD_INPUT)
     except _BAD_INPUT_ERRORS as error:
         fail(_escape(error.message), BAD_INPUT)
@@ -99,7 +113,8 @@ def cli(ctx: click.Context, db: Path | None, endpoint: str | None) -> None:
 
     Push your run folders, see the standings and how the fast models were built.
     """
-    ctx.obj = Context(db, endpoint)
+    # `obj` may be given (as tests do): a function that opens the embedded board.
+    ctx.obj = Context(db, endpoint, ctx.obj if callable(ctx.obj) else local_board)
 
 
 # ---- assemble ----------------------------------------------------------------------------
@@ -156,16 +171,37 @@ def assemble_command(path: Path, track: str | None, custom_track: bool, racer: s
 @overrides_options
 @click.option("--board", "board_id", help="Push to this board (default: the track's board).")
 @click.option("--dry-run", is_flag=True, help="Assemble and check, but send nothing.")
+@click.option("--watch", is_flag=True,
+              help="PATH is a training folder: keep watching it and push each evaluation as it "
+                   "finishes, one submission per evaluation metrics file, until Ctrl-C.")
+@click.option("--interval", type=click.FloatRange(min=0.1), default=10.0, show_default=True,
+              metavar="SECONDS", help="With --watch: how often to look for new evaluations.")
+@click.option("--only-new", is_flag=True,
+              help="With --watch: leave out the evaluations already in the folder when the watch "
+                   "starts.")
 @pass_context
 def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track: bool,
-         racer: str | None, model: str | None, board_id: str | None, dry_run: bool) -> None:
+         racer: str | None, model: str | None, board_id: str | None, dry_run: bool, watch: bool,
+         interval: float, only_new: bool) -> None:
     """Assemble each run folder and submit it to the board.
 
     Every path is read and checked first: if one is bad, nothing is pushed. Prints each run's
     rank and whether it is a new best. Pushing the same run twice changes nothing.
+
+    With --watch, PATH is a folder a training writes to: every evaluation in it (unless
+    --only-new) and every new one is pushed on its own once complete, i.e. once its metrics file
+    holds every lap its parameters ask for (NUMBER_OF_TRIALS) or, when they do not say, nothing
+    has written to it for a minute. The board's cooldown is waited out and an unreachable board
+    retried; an evaluation the board refuses is reported and skipped. Ctrl-C stops.
     """
     with edge():
         overrides = _overrides(track, custom_track, racer, model)
+        if watch:
+            _watch(ctx, paths, overrides, board_id, interval, only_new, dry_run)
+            return
+        interval_given = click.get_current_context().get_parameter_source("interval")
+        if only_new or interval_given is not click.core.ParameterSource.DEFAULT:
+            raise click.UsageError("--interval and --only-new go with --watch")
         records = [assemble(path, overrides) for path in paths]
         if dry_run:
             for path, record in zip(paths, records, strict=True):
@@ -175,6 +211,29 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
             receipt = ctx.board.push(record, board_id)
             out.print(render.receipt_line(receipt), soft_wrap=True)
         config.save_settings(racer=records[-1].racer)
+
+
+def _watch(ctx: Context, paths: tuple[Path, ...], overrides: Overrides, board_id: str | None,
+           interval_s: float, only_new: bool, dry_run: bool) -> None:
+    from .watch import PushedEvaluations, Watcher
+
+    if len(paths) != 1:
+        raise click.UsageError("--watch takes one training folder")
+    if dry_run:
+        raise click.UsageError("--watch and --dry-run do not go together")
+    if not paths[0].is_dir():
+        raise click.UsageError(f"--watch needs a training folder; {paths[0]} is not a folder")
+    target = ctx.endpoint or str(ctx.db.resolve())
+    memory = PushedEvaluations(config.watch_memory_path(), f"{target} {board_id or ''}".strip())
+    watcher = Watcher(paths[0], ctx.board, overrides, board_id, console=out,
+                      interval_s=interval_s, only_new=only_new, memory=memory)
+    previous = signal.signal(signal.SIGTERM, _interrupt)  # stop as Ctrl-C does
+    try:
+        watcher.run()
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if watcher.summary.last_racer:
+            config.save_settings(racer=watcher.summary.last_racer)
 
 
 def _print_dry_run(path: Path, record: Record) -> None:
@@ -202,7 +261,8 @@ def _board_id(track: str | None, board: str | None) -> str:
 @click.option("--board", help="The board id to show.")
 @click.option("--top", type=click.IntRange(1, 100_000), default=25, show_default=True,
               help="How many entries.")
-@click.option("--format", "fmt", type=click.Choice(FORMATS), default="table", show_default=True)
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default="table", show_default=True,
+              help="table for people; json, csv or markdown for scripts and posts.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="Write to this file instead of the terminal.")
 @pass_context
@@ -246,17 +306,21 @@ def _emit(page: Any, fmt: str, output: Path | None) -> None:
 
 
 @cli.command()
+@click.option("--status", "wanted", type=click.Choice(["open", "upcoming", "closed"], case_sensitive=False),
+              help="Only the boards that are open, not open yet, or closed.")
 @click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
-              show_default=True)
+              show_default=True, help=FORMAT_HELP)
 @pass_context
-def boards(ctx: Context, fmt: str) -> None:
-    """List the boards with their track, timing method and number of racers."""
+def boards(ctx: Context, wanted: str | None, fmt: str) -> None:
+    """List the boards: track, timing, status, window and racers."""
     with edge():
-        found = ctx.board.boards()
+        found = [b for b in ctx.board.boards() if not wanted or b.status.value == wanted.upper()]
         if fmt == "json":
             click.echo(render.write_json([b.model_dump(mode="json") for b in found]), nl=False)
         elif found:
-            out.print(render.boards_table(found))
+            out.print(render.boards_table(found, out.width))
+        elif wanted:
+            out.print(f"No {wanted.lower()} boards.")
         else:
             out.print("No boards yet: push a run with `drboard push PATH`.")
 
@@ -278,11 +342,14 @@ def _racer(racer: str | None) -> str:
 @click.option("--track", help="Only this track's default board.")
 @click.option("--board", help="Only this board.")
 @click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
-              show_default=True)
+              show_default=True, help=FORMAT_HELP)
 @pass_context
 def history(ctx: Context, racer: str | None, track: str | None, board: str | None,
             fmt: str) -> None:
-    """Every submission of a racer, oldest first; ★ marks the one that counts."""
+    """A racer's submissions on every board, oldest first.
+
+    ★ marks each board's counted submission, the racer's best there.
+    """
     with edge():
         name = _racer(racer)
         board_id = _board_id(track, board) if (track or board) else None
@@ -300,7 +367,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
 @click.option("--track", help="The track whose default board to look at.")
 @click.option("--board", help="The board id to look at.")
 @click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
-              show_default=True)
+              show_default=True, help=FORMAT_HELP)
 @pass_context
 def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: str) -> None:
     """How a racer's best model was built: hyperparameters, action space, laps, training."""
@@ -310,6 +377,181 @@ def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: st
             click.echo(view.model_dump_json(indent=2))
         else:
             out.print(render.racer_panel(view))
+
+
+@cli.command()
+@click.option("--racer", envvar="DRBOARD_RACER",
+              help="The racer (default: the last racer who pushed from this machine). "
+                   "Env: DRBOARD_RACER.")
+@click.option("--track", help="Only this track's default board.")
+@click.option("--board", help="Only this board.")
+@click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
+              show_default=True, help=FORMAT_HELP)
+@pass_context
+def status(ctx: Context, racer: str | None, track: str | None, board: str | None, fmt: str) -> None:
+    """Where a racer stands on each board they pushed to.
+
+    For each board: the latest submission and its result, the rank and gap to the leader of the
+    racer's best, the submissions used (of the board's maximum) and when the next one is allowed.
+    """
+    with edge():
+        name = _racer(racer)
+        board_id = _board_id(track, board) if (track or board) else None
+        summary = ctx.board.status(name, board_id)
+        if fmt == "json":
+            click.echo(summary.model_dump_json(indent=2))
+        else:
+            out.print(render.status_table(summary))
+
+
+# ---- organisers: board management --------------------------------------------------------
+
+
+@cli.group(name="board")
+def board_group() -> None:
+    """Organisers: create, update, close, delete and restore named boards.
+
+    A named board has its own track, timing method, window and per-racer limits; racers push to
+    it with `drboard push PATH --board ID`. On a deployed board these calls are signed with your
+    AWS credentials and need an IAM policy allowing them; reading stays public.
+    """
+
+
+def _setting_options(update: bool) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """The options create and update share; in an update, `none` clears a time or a limit."""
+    clear = " `none` clears it." if update else ""
+    options = [
+        click.option("--title", required=not update, help="The board's title, as racers see it."),
+        click.option("--description", help="A longer text: the rules, prizes, who may race."),
+        click.option("--method", type=click.Choice([m.value for m in TimingMethod], case_sensitive=False),
+                     metavar="|".join(TimingMethod),
+                     help="How racers are timed" + ("." if update else " (default: BEST_LAP_TIME).")),
+        click.option("--min-laps", type=board_options.Count(clearable=update), metavar="N",
+                     help="Completed laps to qualify (default: the method's, 1 or 3)."
+                          + (" `none` goes back to it." if update else "")),
+        click.option("--opens-at", type=board_options.When(clearable=update), metavar="WHEN",
+                     help="When it opens: ISO 8601 with a time zone, or `now`." + clear),
+        click.option("--closes-at", type=board_options.When(clearable=update), metavar="WHEN",
+                     help="When it closes: ISO 8601 with a time zone, or `now`." + clear),
+        click.option("--cooldown", type=board_options.Duration(clearable=update, longest_s=MAX_COOLDOWN_S),
+                     metavar="DURATION",
+                     help="The least time between a racer's submissions: 90s, 30m, 1h30m, 2d or "
+                          "seconds." + clear),
+        click.option("--max-submissions", type=board_options.Count(clearable=update), metavar="N",
+                     help="The most submissions a racer may make." + clear),
+    ]
+
+    def decorate(command: Callable[..., Any]) -> Callable[..., Any]:
+        for option in reversed(options):
+            command = option(command)
+        return command
+
+    return decorate
+
+
+@board_group.command(name="create")
+@click.argument("board_id", metavar="ID")
+@click.option("--track", required=True, help="The track (WORLD_NAME, alias or display name).")
+@click.option("--custom-track", is_flag=True, help="Take --track exactly as the name of a track of your own.")
+@click.option("--clockwise", is_flag=True, help="Runs go clockwise on this board.")
+@click.option("--race-type", type=click.Choice([r.value for r in RaceType], case_sensitive=False),
+              metavar="|".join(RaceType), help="The race type of the runs it takes (default: TIME_TRIAL).")
+@_setting_options(update=False)
+@pass_context
+def board_create(ctx: Context, /, board_id: str, **options: Any) -> None:
+    """Create a named board with its own rules, window and limits.
+
+    ID is letters, digits, `_`, `-` and `.` (up to 64), and not a track's default board id.
+    """
+    with edge():
+        view = ctx.board.create_board(board_options.board_spec({"board_id": board_id, **options}))
+        out.print(render.board_panel(view))
+
+
+@board_group.command(name="update")
+@click.argument("board_id", metavar="ID")
+@_setting_options(update=True)
+@pass_context
+def board_update(ctx: Context, /, board_id: str, **options: Any) -> None:
+    """Change a named board's settings: only the options given change.
+
+    The timing method and minimum laps change only while the board has no entries.
+    """
+    with edge():
+        view = ctx.board.update_board(board_id, board_options.board_changes(options))
+        out.print(render.board_panel(view))
+
+
+@board_group.command(name="close")
+@click.argument("board_id", metavar="ID")
+@pass_context
+def board_close(ctx: Context, board_id: str) -> None:
+    """Close a named board now: it takes no more submissions; its standings stay."""
+    with edge():
+        out.print(render.board_panel(ctx.board.close_board(board_id)))
+
+
+@board_group.command(name="delete")
+@click.argument("board_id", metavar="ID")
+@pass_context
+def board_delete(ctx: Context, board_id: str) -> None:
+    """Delete a named board softly: it leaves lists and pulls, and `restore` brings it back whole."""
+    with edge():
+        out.print(render.deleted_line(ctx.board.delete_board(board_id)), soft_wrap=True)
+
+
+@board_group.command(name="restore")
+@click.argument("board_id", metavar="ID")
+@pass_context
+def board_restore(ctx: Context, board_id: str) -> None:
+    """Bring a deleted board back, with all its entries and submissions."""
+    with edge():
+        out.print(render.board_panel(ctx.board.restore_board(board_id)))
+
+
+# ---- export and import -------------------------------------------------------------------
+
+
+@cli.command(name="export")
+@click.argument("board_id", metavar="BOARD")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write to this file (written whole or not at all) instead of standard output.")
+@pass_context
+def export_command(ctx: Context, board_id: str, output: Path | None) -> None:
+    """Write a board as JSON lines: a backup, or a move to another board.
+
+    One JSON object per line: the board and its settings first, then its entries in rank order,
+    then every submission with its record. `drboard import` loads the file into any board.
+    """
+    with edge():
+        if output:
+            with transfer.replaced_on_success(output) as handle:
+                counts = transfer.write_export(ctx.board, board_id, handle)
+        else:
+            counts = transfer.write_export(ctx.board, board_id, sys.stdout)
+        err.print(render.export_line(board_id, counts, str(output) if output else None), soft_wrap=True)
+
+
+@cli.command(name="import")
+@click.argument("source", metavar="FILE", type=click.Path(exists=True, dir_okay=False, allow_dash=True))
+@click.option("--board", "board_id", metavar="NEW_ID",
+              help="Import under this board id instead of the exported one.")
+@pass_context
+def import_command(ctx: Context, source: str, board_id: str | None) -> None:
+    """Load a `drboard export` file into this board; importing twice changes nothing.
+
+    FILE (or `-` for standard input) is checked whole first: one bad line names the line and the
+    field, and nothing is imported. The board is created unless it exists (then its own settings
+    stay); every submission is replayed with its first submission time, and the entries are
+    recomputed under the board's rules.
+    """
+    with edge(), transfer.opened_export(source) as (name, handle):
+        contents = transfer.check_export(name, handle)
+        with render.progress(err) as progress:
+            task = progress.add_task("Importing submissions", total=contents.submissions)
+            summary = transfer.import_export(ctx.board, name, handle, contents, board_id,
+                                             advance=lambda: progress.advance(task))
+        out.print(render.import_summary(summary), soft_wrap=True)
 
 
 # ---- targets: configure and serve -------------------------------------------------------
@@ -359,7 +601,8 @@ def configure(stack_name: str | None, region: str | None, endpoint_url: str | No
 @cli.command()
 @click.option("--host", default="127.0.0.1", show_default=True,
               help="The address to listen on; 0.0.0.0 lets racers on your network push.")
-@click.option("--port", type=click.IntRange(0, 65535), default=8000, show_default=True)
+@click.option("--port", type=click.IntRange(0, 65535), default=8000, show_default=True,
+              help="The port to listen on; 0 picks a free one.")
 @click.option("--table", help="Serve a DynamoDB table instead of the embedded board.")
 @click.option("--endpoint-url", metavar="URL",
               help="With --table: the DynamoDB endpoint, e.g. DynamoDB Local's http://127.0.0.1:8001.")

@@ -1,7 +1,11 @@
 """A deployed board (or `drboard serve`) over HTTP: the same calls as the in-process board.
 
-Pushes are signed with SigV4 using the caller's AWS credentials when there are any, since a
-deployed board only takes IAM-authorised writes; reads are public.
+Every ``BoardClient`` call maps to one route (see the README's HTTP API). Pushes and every
+organiser call are signed with SigV4 using the caller's AWS credentials when there are any, since
+a deployed board only takes IAM-authorised writes and organiser requests; reads are public.
+An error answer becomes the domain error the board named in its ``error`` field, so a refusal
+reads the same as on the in-process board; an answer without one (API Gateway's own, e.g. 403
+for an unsigned request) is mapped by its status.
 """
 
 from __future__ import annotations
@@ -11,18 +15,40 @@ import re
 import urllib.error
 import urllib.parse
 import urllib.request
+from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
-from drboard_functions.models import BoardPage, BoardView, HistoryItem, PushReceipt, RacerView
+from drboard_functions.models import (
+    Board,
+    BoardChanges,
+    BoardPage,
+    BoardSpec,
+    BoardView,
+    ExportPage,
+    HistoryItem,
+    ImportedSubmission,
+    ImportReceipt,
+    PushReceipt,
+    RacerHistory,
+    RacerSummary,
+    RacerView,
+)
 from drboard_functions.service import default_board_id
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 T = TypeVar("T", bound=BaseModel)
 
 TIMEOUT_S = 20
+DEFAULT_RETRY_AFTER_S = 60
 _API_REGION = re.compile(r"\.execute-api\.([a-z0-9-]+)\.")
+
+
+@dataclass(frozen=True)
+class Answer:
+    status: int
+    body: Any
 
 
 class HttpBoard:
@@ -30,54 +56,89 @@ class HttpBoard:
         self.endpoint = endpoint.rstrip("/")
         self.timeout_s = timeout_s
 
-    # ---- the BoardClient calls ------------------------------------------------------------
+    # ---- racers -------------------------------------------------------------------------
 
     def push(self, record: Record, board_id: str | None) -> PushReceipt:
         board = board_id or default_board_id(record.track, record.direction, record.race_type)
-        body = record.model_dump_json().encode("utf-8")
-        answer = self._call("POST", f"/boards/{_quote(board)}/submissions", body=body)
+        answer = self._call("POST", f"/boards/{_quote(board)}/submissions", body=record, signed=True)
         return _parse(PushReceipt, answer)
 
     def boards(self) -> list[BoardView]:
         answer = self._call("GET", "/boards")
-        items = answer.get("boards", answer) if isinstance(answer, dict) else answer
+        items = answer.body.get("boards", answer.body) if isinstance(answer.body, dict) else answer.body
         try:
             return TypeAdapter(list[BoardView]).validate_python(items)
         except ValidationError as error:
             raise errors.BoardUnreachable(f"unexpected answer from {self.endpoint}: {error}") from None
 
     def board_page(self, board_id: str, limit: int, cursor: str | None) -> BoardPage:
-        query = {"limit": str(limit)} | ({"cursor": cursor} if cursor else {})
-        answer = self._call("GET", f"/boards/{_quote(board_id)}?{urllib.parse.urlencode(query)}")
-        return _parse(BoardPage, answer)
+        query = {"limit": str(limit), "cursor": cursor}
+        return _parse(BoardPage, self._call("GET", f"/boards/{_quote(board_id)}", query=query))
 
     def racer(self, board_id: str, racer: str) -> RacerView:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/racers/{_quote(racer)}")
         return _parse(RacerView, answer)
 
     def history(self, racer: str, board_id: str | None) -> list[HistoryItem]:
-        board_ids = [board_id] if board_id else [b.board_id for b in self.boards()]
-        items: list[HistoryItem] = []
-        for board in board_ids:
-            try:
-                items.extend(self.racer(board, racer).history)
-            except (errors.RacerNotFound, errors.BoardNotFound):
-                if board_id:
-                    raise
-        return sorted(items, key=lambda item: item.submitted_at)
+        answer = self._call("GET", f"/racers/{_quote(racer)}/submissions", query={"board": board_id})
+        return _parse(RacerHistory, answer).history
+
+    def status(self, racer: str, board_id: str | None) -> RacerSummary:
+        answer = self._call("GET", f"/racers/{_quote(racer)}", query={"board": board_id})
+        return _parse(RacerSummary, answer)
+
+    # ---- organisers (always signed) -------------------------------------------------------
+
+    def create_board(self, spec: BoardSpec) -> BoardView:
+        return _parse(BoardView, self._call("POST", "/boards", body=spec, signed=True))
+
+    def update_board(self, board_id: str, changes: BoardChanges) -> BoardView:
+        # Only the fields the caller set: an absent field stays as it is, a null one is cleared.
+        body = changes.model_dump_json(exclude_unset=True).encode("utf-8")
+        answer = self._call("PATCH", f"/boards/{_quote(board_id)}", body=body, signed=True)
+        return _parse(BoardView, answer)
+
+    def close_board(self, board_id: str) -> BoardView:
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/close", signed=True)
+        return _parse(BoardView, answer)
+
+    def delete_board(self, board_id: str) -> BoardView:
+        return _parse(BoardView, self._call("DELETE", f"/boards/{_quote(board_id)}", signed=True))
+
+    def restore_board(self, board_id: str) -> BoardView:
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/restore", signed=True)
+        return _parse(BoardView, answer)
+
+    def export_page(self, board_id: str, cursor: str | None) -> ExportPage:
+        answer = self._call("GET", f"/boards/{_quote(board_id)}/export", query={"cursor": cursor},
+                            signed=True)
+        return _parse(ExportPage, answer)
+
+    def import_board(self, board: Board) -> tuple[BoardView, bool]:
+        answer = self._call("PUT", f"/boards/{_quote(board.board_id)}/import", body=board,
+                            signed=True)
+        return _parse(BoardView, answer), answer.status == 201
+
+    def import_submission(self, board_id: str, item: ImportedSubmission) -> ImportReceipt:
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/imports", body=item, signed=True)
+        return _parse(ImportReceipt, answer)
 
     # ---- HTTP ---------------------------------------------------------------------------
 
-    def _call(self, method: str, path: str, body: bytes | None = None) -> Any:
-        url = self.endpoint + path
+    def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
+              query: dict[str, str | None] | None = None, signed: bool = False) -> Answer:
+        given = {name: value for name, value in (query or {}).items() if value}
+        url = self.endpoint + path + (f"?{urllib.parse.urlencode(given)}" if given else "")
+        data = body.model_dump_json().encode("utf-8") if isinstance(body, BaseModel) else body
         headers = {"Accept": "application/json"}
-        if body is not None:
+        if data is not None:
             headers["Content-Type"] = "application/json"
-            headers = _signed(method, url, body, headers)
-        request = urllib.request.Request(url, data=body, headers=headers, method=method)
+        if signed:
+            headers = _signed(method, url, data or b"", headers)
+        request = urllib.request.Request(url, data=data, headers=headers, method=method)
         try:
             with urllib.request.urlopen(request, timeout=self.timeout_s) as response:
-                return _json(response.read(), url)
+                return Answer(response.status, _json(response.read(), url))
         except urllib.error.HTTPError as error:
             raise _domain_error(error, url) from None
         except (urllib.error.URLError, TimeoutError, ConnectionError) as error:
@@ -96,9 +157,9 @@ def _json(data: bytes, url: str) -> Any:
         raise errors.BoardUnreachable(f"{url} did not answer with JSON") from None
 
 
-def _parse(model: type[T], answer: Any) -> T:
+def _parse(model: type[T], answer: Answer) -> T:
     try:
-        return model.model_validate(answer)
+        return model.model_validate(answer.body)
     except ValidationError as error:
         raise errors.BoardUnreachable(f"unexpected answer from the board: {error}") from None
 
@@ -121,6 +182,14 @@ def _signed(method: str, url: str, body: bytes, headers: dict[str, str]) -> dict
     return dict(request.headers.items())
 
 
+#: The domain errors a board may name in an error answer's ``error`` field.
+_NAMED_ERRORS: dict[str, type[errors.DomainError]] = {
+    kind.__name__: kind for kind in vars(errors).values()
+    if isinstance(kind, type) and issubclass(kind, errors.DomainError)
+    and kind not in (errors.DomainError, errors.BoardUnreachable)
+}
+
+#: Answers without a domain error's name (API Gateway's own, a proxy's): their status decides.
 _STATUS_ERRORS: dict[int, type[errors.DomainError]] = {
     400: errors.InvalidQuery,
     401: errors.NotAuthorized,
@@ -129,6 +198,9 @@ _STATUS_ERRORS: dict[int, type[errors.DomainError]] = {
     413: errors.SubmissionTooLarge,
     422: errors.InvalidSubmission,
 }
+
+_SIGN_HINT = ("a deployed board takes pushes and organiser requests signed with AWS credentials "
+              "allowed to invoke its API")
 
 
 def _domain_error(error: urllib.error.HTTPError, url: str) -> errors.DomainError:
@@ -139,21 +211,26 @@ def _domain_error(error: urllib.error.HTTPError, url: str) -> errors.DomainError
     if not isinstance(answer, dict):
         answer = {}
     message = _message(answer) or f"{url} answered {error.code} {error.reason}"
-    detail = answer.get("detail")
-    if isinstance(detail, list) and detail and isinstance(detail[0], dict) and "loc" in detail[0]:
-        message = f"{message}: {detail[0].get('loc')}: {detail[0].get('msg', '')}"
-    if error.code == 429:
-        retry = error.headers.get("Retry-After", "60")
-        return errors.TooSoon(message, int(retry) if retry.isdigit() else 60)
+    detail = _detail(answer.get("detail"))
+    if detail:
+        message = f"{message}: {detail[0]['loc']}: {detail[0]['msg']}"
+    named = _NAMED_ERRORS.get(str(answer.get("error", "")))
+    if named is errors.TooSoon or (named is None and error.code == 429):
+        retry = (error.headers.get("Retry-After") or "").strip()
+        return errors.TooSoon(message, int(retry) if retry.isdigit() else DEFAULT_RETRY_AFTER_S)
+    if named is not None:
+        return named(message, detail=detail)
     if error.code in (401, 403):
-        return errors.NotAuthorized(
-            f"{message} (a deployed board takes pushes signed with AWS credentials allowed to "
-            "invoke its API)")
-    # The board names the domain error it raised; otherwise the status decides.
-    named = getattr(errors, str(answer.get("error", "")), None)
-    if isinstance(named, type) and issubclass(named, errors.DomainError) and named is not errors.TooSoon:
-        return named(message)
+        return errors.NotAuthorized(f"{message} ({_SIGN_HINT})")
     return _STATUS_ERRORS.get(error.code, errors.BoardUnreachable)(message)
+
+
+def _detail(value: Any) -> list[dict[str, str]]:
+    if not isinstance(value, list):
+        return []
+    return [{"loc": str(item.get("loc", "")), "msg": str(item.get("msg", "")),
+             "type": str(item.get("type", "value_error"))}
+            for item in value if isinstance(item, dict)]
 
 
 def _message(answer: Any) -> str | None:

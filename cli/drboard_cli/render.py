@@ -6,6 +6,7 @@ import csv
 import io
 import json
 from collections.abc import Iterable
+from datetime import UTC, datetime, timedelta
 from typing import IO, Any
 
 from drboard_assembler.record import Record
@@ -13,22 +14,31 @@ from drboard_functions.display import (
     DASH,
     algorithm_name,
     design_summary,
+    duration,
     gap,
     method_label,
     percent,
     seconds,
+    when,
 )
 from drboard_functions.models import (
     BoardPage,
+    BoardStatus,
     BoardView,
     EntryView,
     HistoryItem,
     PushReceipt,
+    RacerStatus,
+    RacerSummary,
     RacerView,
 )
 from rich.console import Console, Group
+from rich.panel import Panel
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 from rich.text import Text
+
+from .transfer import ExportCounts, ImportSummary
 
 
 def _time_label(entry: EntryView) -> str:
@@ -69,15 +79,97 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     return table
 
 
-def boards_table(boards: list[BoardView]) -> Table:
+_STATUS_STYLE = {BoardStatus.OPEN: "green", BoardStatus.UPCOMING: "yellow", BoardStatus.CLOSED: "dim"}
+
+
+def _track_label(board: BoardView) -> str:
+    label = board.track_name + (" (clockwise)" if board.direction == "cw" else "")
+    return label if board.race_type.value == "TIME_TRIAL" else f"{label}, {board.race_type.value}"
+
+
+def _status_label(board: BoardView) -> Text:
+    return Text(board.status.value.lower(), style=_STATUS_STYLE[board.status])
+
+
+def boards_table(boards: list[BoardView], width: int = 120) -> Table:
+    """Each board's id and title, track, timing, status and window; on a narrow terminal the
+    title gives way and the window goes under the status."""
+    wide = width >= 110
     table = Table(title="Boards", header_style="bold")
-    for name in ("Board", "Track", "Race type", "Method", "Racers"):
-        table.add_column(name)
+    table.add_column("Board", no_wrap=True)  # ids are typed in other commands: never cut
+    columns = ("Track", "Method", "Status", "Opens", "Closes") if wide else ("Track", "Method", "Status")
+    for name in columns:
+        table.add_column(name, overflow="fold")
+    table.add_column("Racers", justify="right")
     for board in boards:
-        track = board.track_name + (" (clockwise)" if board.direction == "cw" else "")
-        table.add_row(board.board_id, track, board.race_type.value, method_label(board),
-                      str(board.participants))
+        cells: list[Text | str] = [_board_label(board) if wide else board.board_id,
+                                   Text(_track_label(board)), method_label(board)]
+        if wide:
+            cells += [_status_label(board), when(board.opens_at), when(board.closes_at)]
+        else:
+            cells.append(_status_label(board) + _window_label(board))
+        table.add_row(*cells, str(board.participants))
     return table
+
+
+def _board_label(board: BoardView) -> Text:
+    return Text.assemble(board.board_id, (f"\n{board.title}", "dim"))
+
+
+def _window_label(board: BoardView) -> str:
+    if board.status is BoardStatus.UPCOMING:
+        return f"\nopens {when(board.opens_at)}"
+    if board.closes_at is None:
+        return ""
+    return f"\n{'closes' if board.status is BoardStatus.OPEN else 'closed'} {when(board.closes_at)}"
+
+
+def board_panel(board: BoardView) -> Panel:
+    """One board's settings, as an organiser set them."""
+    grid = Table.grid(padding=(0, 2))
+    grid.add_column(style="bold")
+    grid.add_column()
+    grid.add_row("Status", _status_label(board))
+    grid.add_row("Track", Text(f"{_track_label(board)} ({board.track})"))
+    grid.add_row("Timing", method_label(board))
+    grid.add_row("Opens", when(board.opens_at) if board.opens_at else "when created")
+    grid.add_row("Closes", when(board.closes_at) if board.closes_at else "never")
+    cooldown = f"{duration(board.cooldown_s)} between a racer's submissions" if board.cooldown_s else "none"
+    grid.add_row("Cooldown", cooldown)
+    cap = board.max_submissions
+    grid.add_row("Submissions", f"at most {cap} per racer" if cap else "unlimited")
+    grid.add_row("Racers", str(board.participants))
+    if board.description:
+        grid.add_row("Description", Text(board.description))
+    kind = "named board" if board.kind == "named" else "track's default board"
+    return Panel(grid, title=Text(f"{board.title} · {board.board_id}", style="bold"), subtitle=kind,
+                 expand=False)
+
+
+def import_summary(summary: ImportSummary) -> Text:
+    board = summary.board
+    text = Text()
+    text.append(board.board_id, style="bold")
+    text.append(" (created)" if summary.board_created else " (existing board: its settings kept)")
+    text.append(f": {summary.created} submissions imported, {summary.duplicates} already there")
+    text.append(f" · {plural(board.participants, 'racer')} ranked by {method_label(board)}")
+    if summary.entry_lines:
+        text.append(f" · the file's {summary.entry_lines} entries were recomputed, not copied",
+                    style="dim")
+    return text
+
+
+def export_line(board_id: str, counts: ExportCounts, output: str | None) -> Text:
+    where = f" to {output}" if output else ""
+    return Text(f"Exported {board_id}: {plural(counts.entries, 'entry', 'entries')}, "
+                f"{plural(counts.submissions, 'submission')}{where}")
+
+
+def progress(console: Console) -> Progress:
+    """A progress bar on a terminal; nothing when the output is a file or a pipe."""
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TimeRemainingColumn(), console=console, transient=True,
+                    disable=not console.is_terminal)
 
 
 CSV_FIELDS = ["rank", "racer", "model_name", "qualified", "time_s", "gap_s", "best_lap_s",
@@ -151,13 +243,75 @@ def receipt_line(receipt: PushReceipt) -> Text:
 def history_table(racer: str, items: Iterable[HistoryItem]) -> Table:
     table = Table(title=f"History of {racer}", header_style="bold")
     for name in ("Submitted", "Board", "Model", "Result", "Best lap", "Laps", "Best"):
-        table.add_column(name)
+        table.add_column(name, no_wrap=name == "Board", overflow="fold")
     for item in items:
         result = seconds(item.time_ms) if item.qualified else f"{percent(item.best_completion_pct)}"
         table.add_row(item.submitted_at.strftime("%Y-%m-%d %H:%M:%S"), item.board_id,
                       item.model_name, result, seconds(item.best_lap_ms),
                       str(item.laps_completed), "★" if item.is_best else "")
     return table
+
+
+def status_table(summary: RacerSummary) -> Table:
+    """Per board: the racer's latest submission, where their best stands, what they have left."""
+    table = Table(title=Text(f"Status of {summary.racer}"), header_style="bold")
+    table.add_column("Board", no_wrap=True)
+    for name in ("Latest", "Result", "Rank", "Gap", "Used", "Next"):
+        table.add_column(name, overflow="fold")
+    for status in summary.boards:
+        latest = status.latest
+        result = _result(latest)
+        if not latest.is_best:
+            result += f" (best {_time_label(status.entry)})"
+        table.add_row(
+            _board_label(status.board),
+            Text(f"{latest.submitted_at:%b %d %H:%M}\n{latest.model_name}"),
+            result,
+            f"{status.entry.rank} of {status.board.participants}",
+            gap(status.entry.gap_ms),
+            _submissions_label(status),
+            next_submission(status),
+        )
+    return table
+
+
+def _result(item: HistoryItem) -> str:
+    return seconds(item.time_ms) if item.qualified else f"{percent(item.best_completion_pct)} done"
+
+
+def _submissions_label(status: RacerStatus) -> str:
+    cap = status.board.max_submissions
+    return f"{status.submissions} of {cap}" if cap else str(status.submissions)
+
+
+def next_submission(status: RacerStatus) -> str:
+    """When the racer may submit again on this board, or why they may not."""
+    board = status.board
+    if board.status is BoardStatus.CLOSED:
+        return "board closed"
+    if status.submissions_left == 0:
+        return "none left"
+    if board.status is BoardStatus.UPCOMING:
+        return f"opens {when(board.opens_at)}"
+    return _minute_after(status.next_submission_at) if status.next_submission_at else "now"
+
+
+def _minute_after(moment: datetime) -> str:
+    """``Mar 01 12:31 UTC`` for 12:30:10: short, and never earlier than the moment itself."""
+    moment = moment.astimezone(UTC)
+    if moment.second or moment.microsecond:
+        moment = moment.replace(second=0, microsecond=0) + timedelta(minutes=1)
+    return f"{moment:%b %d %H:%M} UTC"
+
+
+def plural(count: int, word: str, words: str | None = None) -> str:
+    return f"{count} {word if count == 1 else words or word + 's'}"
+
+
+def deleted_line(board: BoardView) -> Text:
+    return Text(f"Deleted {board.board_id} ({plural(board.participants, 'racer')}). Its entries and "
+                f"submissions are kept: `drboard board restore {board.board_id}` brings it back, "
+                f"`drboard export {board.board_id}` saves it.")
 
 
 def racer_panel(view: RacerView) -> Group:

@@ -2,21 +2,34 @@
 
 Each HTTP request becomes an API Gateway HTTP API (v2) event for the same routes the cloud board
 runs, so an event laptop hosts exactly the board that `sam deploy` would.
+
+The organisers' routes (tag ``admin``: create, change, close, delete, restore, export, import)
+are answered only to the computer that runs `serve` (a loopback address): in the cloud, IAM
+decides who may call them; here, the organiser is whoever sits at the serving laptop. Anyone else
+on the network gets 403 ``NotAuthorized`` before the request is even parsed. The address is the
+connection's own; a forwarding header cannot claim loopback. (Behind a reverse proxy on the same
+computer every request would look local: do not put one in front of `serve`.)
 """
 
 from __future__ import annotations
 
+import ipaddress
 import json
+import re
 import threading
 import time
 import uuid
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, urlsplit
 
+from drboard_functions.errors import NotAuthorized
 from drboard_functions.service import LeaderboardService
 from rich.console import Console
+
+if TYPE_CHECKING:
+    from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
 
 MAX_BODY_BYTES = 1024 * 1024  # the routes apply the record's own, smaller bound
 
@@ -61,25 +74,77 @@ def http_event(method: str, target: str, headers: dict[str, str], body: bytes,
     }
 
 
+def is_loopback(address: str) -> bool:
+    """Whether a client address is this computer's own (127.0.0.0/8, ::1, or IPv4-mapped)."""
+    try:
+        ip = ipaddress.ip_address(address.split("%", 1)[0])
+    except ValueError:
+        return False
+    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
+        ip = ip.ipv4_mapped
+    return ip.is_loopback
+
+
+class RouteMatcher:
+    """Which requests go to a set of routes, by method and path (``{param}`` is one segment)."""
+
+    def __init__(self, routes: set[tuple[str, str]]) -> None:
+        self.rules = [(method, re.compile("^" + "/".join(map(_segment_pattern, path.split("/"))) + "$"))
+                      for method, path in sorted(routes)]
+
+    def matches(self, method: str, path: str) -> bool:
+        return any(method == rule_method and rule.match(path) for rule_method, rule in self.rules)
+
+
+def _segment_pattern(segment: str) -> str:
+    return "[^/]+" if segment.startswith("{") and segment.endswith("}") else re.escape(segment)
+
+
+def tagged_routes(app: APIGatewayHttpResolver, tag: str) -> set[tuple[str, str]]:
+    """(METHOD, /path/{param}) of the resolver's routes with this OpenAPI tag."""
+    paths = json.loads(app.get_openapi_json_schema())["paths"]
+    return {(method.upper(), path) for path, operations in paths.items()
+            for method, operation in operations.items() if tag in operation.get("tags", [])}
+
+
 class BoardServer(ThreadingHTTPServer):
     daemon_threads = False  # on shutdown, let requests in flight finish: nothing is lost
     block_on_close = True
 
     def __init__(self, address: tuple[str, int], service: LeaderboardService) -> None:
-        from drboard_functions.routes import build_app, pull_router, push_router
+        from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
 
         super().__init__(address, _Handler)
         self.service = service
-        self.app = build_app(push_router, pull_router)
+        self.app = build_app(push_router, pull_router, admin_router)
+        # Other computers are served by a resolver without the organiser routes at all; asking
+        # for one of those is answered 403 rather than 404.
+        self.public_app = build_app(push_router, pull_router)
+        self.organiser_routes = RouteMatcher(tagged_routes(self.app, ADMIN_TAG))
         # One request at a time through the resolvers: they keep per-request context, and the
         # embedded SQLite board has a single connection.
         self.lock = threading.Lock()
 
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
+        http = event["requestContext"]["http"]
+        local = is_loopback(http["sourceIp"])
+        if not local and self.organiser_routes.matches(http["method"], event["rawPath"]):
+            return _refused(NotAuthorized(
+                "organiser requests are answered only on the computer running `drboard serve`; "
+                f"this one came from {http['sourceIp']}"))
+        app = self.app if local else self.public_app
         with self.lock:
-            self.app.append_context(service=self.service)
+            app.append_context(service=self.service)
             context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
-            return self.app.resolve(event, context)  # type: ignore[arg-type]
+            return app.resolve(event, context)  # type: ignore[arg-type]
+
+
+def _refused(error: NotAuthorized) -> dict[str, Any]:
+    """The answer the routes would give the error (its status from the one mapping)."""
+    from drboard_functions.routes import error_body, status_of
+
+    return {"statusCode": int(status_of(error)), "headers": {"Content-Type": "application/json"},
+            "body": error_body(error).model_dump_json(), "isBase64Encoded": False}
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -90,6 +155,15 @@ class _Handler(BaseHTTPRequestHandler):
         self._dispatch()
 
     def do_POST(self) -> None:
+        self._dispatch()
+
+    def do_PUT(self) -> None:
+        self._dispatch()
+
+    def do_PATCH(self) -> None:
+        self._dispatch()
+
+    def do_DELETE(self) -> None:
         self._dispatch()
 
     def do_OPTIONS(self) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from datetime import UTC, datetime
+
 from .models import BoardView, Design, TimingMethod
 
 DASH = "—"
@@ -44,3 +46,22 @@ def design_summary(design: Design, *, sensors: bool = False) -> str:
 def method_label(board: BoardView) -> str:
     laps = "lap" if board.min_laps == 1 else "laps"
     return f"{_METHODS[board.method]}, {board.min_laps} {laps} to qualify"
+
+
+def duration(total_s: int) -> str:
+    """``5400`` -> ``1 h 30 min``; ``90`` -> ``1 min 30 s``; ``0`` -> ``0 s``."""
+    minutes, secs = divmod(total_s, 60)
+    hours, minutes = divmod(minutes, 60)
+    days, hours = divmod(hours, 24)
+    parts = [f"{days} d" if days else "", f"{hours} h" if hours else "",
+             f"{minutes} min" if minutes else "", f"{secs} s" if secs else ""]
+    return " ".join(part for part in parts if part) or "0 s"
+
+
+def when(moment: datetime | None) -> str:
+    """A moment in UTC, to the minute (to the second when it has seconds): ``2026-12-01 18:00 UTC``."""
+    if moment is None:
+        return DASH
+    moment = moment.astimezone(UTC)
+    pattern = "%Y-%m-%d %H:%M UTC" if moment.second == 0 else "%Y-%m-%d %H:%M:%S UTC"
+    return moment.strftime(pattern)

@@ -4,8 +4,6 @@ Boards, entries and submissions are what the service reasons about; the *View mo
 the API returns and the CLI prints (their field names are the stable JSON the README documents).
 """
 
-from __future__ import annotations
-
 from datetime import UTC, datetime
 from enum import StrEnum
 from typing import Annotated, Any, Literal, Self

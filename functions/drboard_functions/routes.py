@@ -1,20 +1,26 @@
-"""The leaderboard's HTTP routes: Powertools routers for the push and pull functions.
+"""The leaderboard's HTTP routes: Powertools routers for the push, pull and admin functions.
 
-Both Lambda functions and ``drboard serve`` build their resolver with :func:`build_app`, so the
-routes, the validation, the error statuses and the OpenAPI document are the same everywhere.
+The three Lambda functions and ``drboard serve`` build their resolver with :func:`build_app`, so
+the routes, the validation, the error statuses and the OpenAPI document are the same everywhere.
 
+- ``push_router``: a racer's submission (IAM-signed in the cloud). ``pull_router``: the public
+  reads (boards, standings, racers, web pages). ``admin_router``: the organisers' routes (create,
+  change, close, delete, restore, export and import boards), every one IAM-signed in the cloud
+  and answered by ``drboard serve`` only to the computer it runs on.
 - The routes never build a service: the caller puts one in the resolver's context before each
   ``resolve`` (``app.append_context(service=...)``); the routes reach it through ``Depends``.
-- The typed domain errors become HTTP statuses in one place, :func:`_register_error_handlers`;
-  every error body is ``{"error": <name>, "message": ..., "detail": [{"loc", "msg", "type"}]}``
-  (the message says what went wrong; the detail, when there is one, says where).
-- The push body is bounded before it is parsed: the resolver's JSON body deserializer refuses a
-  body over ``limits.MAX_RECORD_BYTES`` (413) before ``json.loads`` sees it, then Powertools
-  validates the parsed body as a :class:`Record` (422 with field-level detail). This keeps the
-  request body documented as the Record schema in the OpenAPI document, with no second parser.
-  (Powertools runs request validation before any middleware, so a middleware could not check
-  the size first.) A form-encoded body is parsed by Powertools' own form parser and refused as
-  422, an unknown content type as 415; API Gateway bounds every body at 10 MB anyway.
+- The typed domain errors become HTTP statuses in one place, :data:`ERROR_STATUS`; every error
+  body is ``{"error": <name>, "message": ..., "detail": [{"loc", "msg", "type"}]}`` (the message
+  says what went wrong; the detail, when there is one, says where).
+- Every JSON body is bounded before it is parsed: the resolver's JSON body deserializer refuses a
+  body over its route's bound (413) before ``json.loads`` sees it — a record's
+  ``limits.MAX_RECORD_BYTES``; an imported submission's, a record plus a little for its timestamp
+  (its record is then held to the record's own bound); a board's settings, 16 KiB — then
+  Powertools validates the parsed body as the route's model (422 with field-level detail). This
+  keeps each request body documented as its model's schema in the OpenAPI document, with no
+  second parser. (Powertools runs request validation before any middleware, so a middleware could
+  not check the size first.) A form-encoded body is parsed by Powertools' own form parser and
+  refused as 422, an unknown content type as 415; API Gateway bounds every body at 10 MB anyway.
 
 Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerate the committed
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
@@ -24,11 +30,12 @@ from __future__ import annotations
 
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from http import HTTPStatus
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as distribution_version
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar, cast
 from urllib.parse import unquote
 
 from aws_lambda_powertools.event_handler import (
@@ -44,7 +51,6 @@ from aws_lambda_powertools.event_handler.openapi.exceptions import (
     RequestUnsupportedContentType,
     RequestValidationError,
 )
-from aws_lambda_powertools.event_handler.openapi.models import APIKey, APIKeyIn, Server
 from aws_lambda_powertools.event_handler.openapi.params import Body, Path, Query
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import __version__ as assembler_version
@@ -55,21 +61,47 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from . import web
 from .errors import (
+    BoardClosed,
+    BoardExists,
+    BoardLocked,
     BoardMismatch,
     BoardNotFound,
     DomainError,
     InvalidQuery,
     InvalidSubmission,
+    NotAuthorized,
     RacerNotFound,
+    SubmissionLimitReached,
     SubmissionTooLarge,
     TooSoon,
 )
-from .models import MAX_PAGE, BoardPage, BoardView, PushReceipt, RacerView
+from .models import (
+    MAX_PAGE,
+    Board,
+    BoardChanges,
+    BoardPage,
+    BoardSpec,
+    BoardView,
+    ExportPage,
+    ImportedSubmission,
+    ImportReceipt,
+    PushReceipt,
+    RacerHistory,
+    RacerSummary,
+    RacerView,
+)
 from .service import MAX_CURSOR_CHARS, LeaderboardService
+
+if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
+    from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
 
 TITLE = "drboard"
 DEFAULT_LIMIT = 100
 MAX_PATH_PARAM_CHARS = 256  # a board id or a racer alias, percent-encoded
+#: A board's settings (title, description, track, window, limits): well under this in JSON.
+MAX_BOARD_BODY_BYTES = 16 * limits.KIB
+#: An imported submission is a record and its first submission time: room for the envelope.
+IMPORT_HEADROOM_BYTES = 4 * limits.KIB
 HTML = "text/html; charset=utf-8"
 #: The web pages load nothing and run no script: only their own inline style.
 PAGE_HEADERS = {
@@ -79,9 +111,12 @@ PAGE_HEADERS = {
     "Cache-Control": "no-store",
 }
 SIGV4 = "sigv4"
+#: The tag of every organiser route: IAM-signed in the cloud, loopback only on `drboard serve`.
+ADMIN_TAG = "admin"
 
 push_router = Router()
 pull_router = Router()
+admin_router = Router()
 
 
 def api_version() -> str:
@@ -132,6 +167,10 @@ _PAGE_RESPONSE: OpenAPIResponse = {
     "description": "The web page.",
     "content": {"text/html": {"schema": {"type": "string"}}},
 }
+_BAD_PATH = "A bad board id or racer alias (too long)."
+_UNSIGNED = ("Not signed with SigV4 by an identity allowed to invoke the route (API Gateway's own "
+             "answer, without an `error` name); on `drboard serve`, a request from another "
+             "computer than the one serving (`NotAuthorized`).")
 
 # ---- request parameters ------------------------------------------------------------------------
 
@@ -143,6 +182,8 @@ RacerAlias = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
 Limit = Annotated[int, Query(ge=1, le=MAX_PAGE, description="How many entries (1..500).")]
 Cursor = Annotated[str | None, Query(max_length=MAX_CURSOR_CHARS,
                                      description="`next_cursor` of the previous page.")]
+OnBoard = Annotated[str | None, Query(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
+                                      description="Only this board (default: every board).")]
 
 
 def current_service(request: Request) -> LeaderboardService:
@@ -162,12 +203,64 @@ def _segment(value: str) -> str:
     return unquote(value)
 
 
-def bounded_json(body: str) -> Any:
-    """The resolver's JSON body parser: a body over the record size bound is refused unparsed."""
-    if len(body) > limits.MAX_RECORD_BYTES or len(body.encode("utf-8")) > limits.MAX_RECORD_BYTES:
+# ---- request bodies: what each route takes, and its bound --------------------------------------
+
+
+@dataclass(frozen=True)
+class RequestBody:
+    """What a route's JSON body is: its name in messages, its bound in bytes (checked before it
+    is parsed), and the domain error a body that fails validation answers as."""
+
+    name: str  # the ``loc`` of a problem with the body as a whole
+    max_bytes: int
+    invalid: type[DomainError]
+
+    @property
+    def what(self) -> str:
+        return f"the {self.name}"
+
+
+RECORD_BODY = RequestBody("record", limits.MAX_RECORD_BYTES, InvalidSubmission)
+IMPORT_BODY = RequestBody("submission", limits.MAX_RECORD_BYTES + IMPORT_HEADROOM_BYTES,
+                          InvalidSubmission)
+BOARD_BODY = RequestBody("board", MAX_BOARD_BODY_BYTES, InvalidQuery)
+CHANGES_BODY = RequestBody("changes", MAX_BOARD_BODY_BYTES, InvalidQuery)
+
+_BODIES: dict[Callable[..., Any], RequestBody] = {}
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def takes(body: RequestBody) -> Callable[[F], F]:
+    """Declare the JSON body a route takes (under its router's decorator)."""
+    def register(route: F) -> F:
+        _BODIES[route] = body
+        return route
+    return register
+
+
+def _route_body(app: APIGatewayHttpResolver) -> RequestBody:
+    route = app.context.get("_route")
+    return _BODIES.get(route.func, RECORD_BODY) if route is not None else RECORD_BODY
+
+
+def bounded_json(body: str, bound: RequestBody = RECORD_BODY) -> Any:
+    """Parse a JSON request body; a body over its route's bound is refused unparsed (413)."""
+    if len(body) > bound.max_bytes or len(body.encode("utf-8")) > bound.max_bytes:
         raise SubmissionTooLarge(
-            f"the request body is over {limits.MAX_RECORD_BYTES} bytes, the bound of a record")
+            f"the request body is over {bound.max_bytes} bytes, the bound of {bound.what}")
     return json.loads(body)
+
+
+def _check_record_size(record: Record) -> None:
+    """A record inside a larger body keeps the record's own bound, as the assembler measures it."""
+    size = len(record.model_dump_json().encode("utf-8"))
+    if size > limits.MAX_RECORD_BYTES:
+        raise SubmissionTooLarge(f"the record is {size} bytes, over the {limits.MAX_RECORD_BYTES} "
+                                 "bytes a record may have")
+
+
+def _json(status: int, body: BaseModel) -> Response[Any]:
+    return Response(status_code=status, content_type=content_types.APPLICATION_JSON, body=body)
 
 
 # ---- push ---------------------------------------------------------------------------------------
@@ -180,29 +273,34 @@ def bounded_json(body: str) -> Any:
     summary="Submit a run",
     description="Validates the record (derived figures, submission id, plausible laps) and stores "
                 "it on the board. 201 for a new submission, 200 when the same run was already "
-                "submitted (nothing changes). Requests must be signed with SigV4 (IAM).",
+                "submitted (nothing changes, whatever the board's window and limits). Requests "
+                "must be signed with SigV4 (IAM).",
     tags=["submissions"],
     security=[{SIGV4: []}],
     responses={
         201: _json_response("The submission was stored.", PushReceipt),
         200: _json_response("The same run was already submitted; nothing changed.", PushReceipt),
+        400: _error_response(_BAD_PATH),
+        403: _error_response("The board is not open (`BoardClosed`: it opens later or has "
+                             "closed), or the racer has made every submission it allows "
+                             "(`SubmissionLimitReached`). " + _UNSIGNED),
         404: _error_response("No such board, and the run's own board is another one."),
         413: _error_response(f"The body is over {limits.MAX_RECORD_BYTES} bytes."),
         415: _error_response("The body is not JSON."),
         422: _error_response("The record is invalid or does not belong on this board."),
-        429: {**_error_response("A submission limit applies; see Retry-After."),
+        429: {**_error_response("The board's cooldown applies (`TooSoon`); see Retry-After."),
               "headers": {"Retry-After": {"description": "Seconds to wait.",
                                           "schema": {"type": "integer"}}}},
     },
 )
+@takes(RECORD_BODY)
 def submit(
     board: BoardId,
     record: Annotated[Record, Body(description="The record `drboard assemble` builds.")],
     service: Service,
 ) -> Response[PushReceipt]:
     receipt = service.push(record, _segment(board))
-    status = HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK
-    return Response(status_code=status, content_type=content_types.APPLICATION_JSON, body=receipt)
+    return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
 
 
 # ---- pull ---------------------------------------------------------------------------------------
@@ -236,11 +334,42 @@ def get_board(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
                 "(design, laps, training).",
     tags=["boards"],
     responses={200: _json_response("The racer's entry, history and best record.", RacerView),
-               400: _error_response("A bad board id or racer alias."),
+               400: _error_response(_BAD_PATH),
                404: _error_response("No such board, or the racer has no entry on it.")},
 )
 def get_racer(board: BoardId, racer: RacerAlias, service: Service) -> RacerView:
     return service.racer(_segment(board), _segment(racer))
+
+
+@pull_router.get(
+    "/racers/<racer>",
+    summary="Where a racer stands",
+    description="On each board the racer pushed to (or on `board` only), latest first: their "
+                "latest submission, their best entry's rank and gap, how many submissions they "
+                "made and have left, and when they may submit next.",
+    tags=["racers"],
+    responses={200: _json_response("The racer's standing on each board.", RacerSummary),
+               400: _error_response(_BAD_PATH),
+               404: _error_response("No such board, or the racer has no submissions (on it).")},
+)
+def get_racer_status(racer: RacerAlias, service: Service, board: OnBoard = None) -> RacerSummary:
+    return service.status(_segment(racer), board)
+
+
+@pull_router.get(
+    "/racers/<racer>/submissions",
+    summary="A racer's submissions",
+    description="Every submission of the racer on every board (or on `board` only), oldest "
+                "first; `is_best` marks the one that counts on its board. `racer` is the alias "
+                "as asked. A racer with no submissions has an empty history.",
+    tags=["racers"],
+    responses={200: _json_response("The racer's submissions, oldest first.", RacerHistory),
+               400: _error_response(_BAD_PATH),
+               404: _error_response("No such board.")},
+)
+def get_racer_history(racer: RacerAlias, service: Service, board: OnBoard = None) -> RacerHistory:
+    alias = _segment(racer)
+    return RacerHistory(racer=alias, history=service.history(alias, board))
 
 
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],
@@ -268,6 +397,187 @@ def _page(html: str, status: int = HTTPStatus.OK,
                     headers=PAGE_HEADERS | (headers or {}))
 
 
+# ---- admin: the organisers' routes --------------------------------------------------------------
+
+
+def _admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
+                     body: RequestBody | None = None,
+                     errors: dict[int, str] | None = None,
+                     also: dict[int, OpenAPIResponse] | None = None) -> dict[int, OpenAPIResponse]:
+    """An organiser route's answers: its own, the refusal of unsigned requests, a body's (413,
+    415, 422), then its own errors and other answers (which replace the general ones)."""
+    responses: dict[int, OpenAPIResponse] = {ok_status: ok, 400: _error_response(_BAD_PATH),
+                                             403: _error_response(_UNSIGNED)}
+    if body is not None:
+        verb = "are" if body.name.endswith("s") else "is"
+        responses[413] = _error_response(f"The body is over {body.max_bytes} bytes.")
+        responses[415] = _error_response("The body is not JSON.")
+        responses[422] = _error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
+    responses |= {status: _error_response(text) for status, text in (errors or {}).items()}
+    return responses | (also or {})
+
+
+_ADMIN: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
+_NO_BOARD = "No such board (or it was deleted)."
+_DEFAULT_BOARD = ("The board is a track's default board, which keeps the default rules "
+                  "(`BoardLocked`).")
+
+
+@admin_router.post(
+    "/boards",
+    status_code=HTTPStatus.CREATED,
+    summary="Create a named board",
+    description="A board of the organiser's own on a track, with its title, timing method, window "
+                "(`opens_at`, `closes_at`) and limits (`cooldown_s` between a racer's "
+                "submissions, `max_submissions` per racer). Racers push to it by its id.",
+    responses=_admin_responses(
+        _json_response("The board was created.", BoardView), ok_status=HTTPStatus.CREATED,
+        body=BOARD_BODY, errors={
+            400: "An unknown or ambiguous track (the closest matches are listed), a window that "
+                 "closes before it opens, or a bad board id.",
+            409: "A board with this id exists, or the id is a track's default board's "
+                 "(`BoardExists`)."}),
+    **_ADMIN,
+)
+@takes(BOARD_BODY)
+def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
+                 service: Service) -> Response[BoardView]:
+    return _json(HTTPStatus.CREATED, service.create_board(spec))
+
+
+@admin_router.patch(
+    "/boards/<board>",
+    summary="Change a named board",
+    description="Only the fields in the body change; `null` clears a window's end or a limit. "
+                "The timing method and minimum laps change only while the board has no entries.",
+    responses=_admin_responses(
+        _json_response("The board as it is now.", BoardView), body=CHANGES_BODY, errors={
+            400: "The title or method cleared, a window that closes before it opens, or a bad "
+                 "board id.",
+            404: _NO_BOARD,
+            409: "The change would rescore entries already on the board, or the board is a "
+                 "track's default board (`BoardLocked`)."}),
+    **_ADMIN,
+)
+@takes(CHANGES_BODY)
+def update_board(board: BoardId,
+                 changes: Annotated[BoardChanges, Body(description="The fields to change.")],
+                 service: Service) -> BoardView:
+    return service.update_board(_segment(board), changes)
+
+
+@admin_router.post(
+    "/boards/<board>/close",
+    summary="Close a named board now",
+    description="Pushes are refused from now on (`BoardClosed`); an upcoming board closes "
+                "without ever opening. Closing a closed board changes nothing.",
+    responses=_admin_responses(_json_response("The closed board.", BoardView),
+                               errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
+    **_ADMIN,
+)
+def close_board(board: BoardId, service: Service) -> BoardView:
+    return service.close_board(_segment(board))
+
+
+@admin_router.delete(
+    "/boards/<board>",
+    summary="Delete a named board (softly)",
+    description="The board disappears from lists, pushes and reads; nothing is erased, and "
+                "`POST /boards/{board}/restore` brings it back whole.",
+    responses=_admin_responses(_json_response("The deleted board.", BoardView),
+                               errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
+    **_ADMIN,
+)
+def delete_board(board: BoardId, service: Service) -> BoardView:
+    return service.delete_board(_segment(board))
+
+
+@admin_router.post(
+    "/boards/<board>/restore",
+    summary="Restore a deleted board",
+    description="The board comes back with every entry and submission it had.",
+    responses=_admin_responses(_json_response("The restored board.", BoardView),
+                               errors={404: "No such board."}),
+    **_ADMIN,
+)
+def restore_board(board: BoardId, service: Service) -> BoardView:
+    return service.restore_board(_segment(board))
+
+
+@admin_router.get(
+    "/boards/<board>/export",
+    summary="Export a board, a page at a time",
+    description="The first page starts with the board; then come its entries in rank order, "
+                "then every submission with its record. Pass the answer's `next_cursor` as "
+                "`cursor` until it is null. Deleted boards export too.",
+    responses=_admin_responses(_json_response("One page of the export.", ExportPage),
+                               errors={400: "A bad cursor or board id.", 404: "No such board."}),
+    **_ADMIN,
+)
+def export_board(board: BoardId, service: Service, cursor: Cursor = None) -> ExportPage:
+    return service.export_page(_segment(board), cursor or None)
+
+
+@admin_router.put(
+    "/boards/<board>/import",
+    status_code=HTTPStatus.CREATED,
+    summary="Import a board from an export",
+    description="Creates the exported board (its `board_id` must be the path's) unless a board "
+                "with that id exists, whose own settings then stay: importing twice changes "
+                "nothing. Then replay its submissions with `POST /boards/{board}/imports`.",
+    responses=_admin_responses(
+        _json_response("The board was created.", BoardView), ok_status=HTTPStatus.CREATED,
+        body=BOARD_BODY, errors={
+            400: "The body's `board_id` is not the path's, or is not a board id.",
+            404: "A deleted board has this id: restore it, or import under another id."},
+        also={200: _json_response("A board with this id exists; it keeps its own settings and "
+                                  "nothing changed.", BoardView)}),
+    **_ADMIN,
+)
+@takes(BOARD_BODY)
+def import_board(board: BoardId,
+                 exported: Annotated[Board, Body(description="The `board` of an export's first line.")],
+                 service: Service) -> Response[BoardView]:
+    board_id = _segment(board)
+    if exported.board_id != board_id:
+        raise InvalidQuery(f"the body is board {exported.board_id!r} but the path names {board_id!r}",
+                           detail=[{"loc": "board_id", "msg": f"should be {board_id!r}",
+                                    "type": "value_error"}])
+    view, created = service.import_board(exported)
+    return _json(HTTPStatus.CREATED if created else HTTPStatus.OK, view)
+
+
+@admin_router.post(
+    "/boards/<board>/imports",
+    status_code=HTTPStatus.CREATED,
+    summary="Replay one exported submission",
+    description="Stores the record as first submitted at `submitted_at`, scored by this board's "
+                "rules; the board's window and limits do not apply. Importing the same "
+                "submission twice changes nothing. The body is bounded at the record's bound plus "
+                f"{IMPORT_HEADROOM_BYTES} bytes, and its record at the record's own bound.",
+    responses=_admin_responses(
+        _json_response("The submission was stored.", ImportReceipt), ok_status=HTTPStatus.CREATED,
+        body=IMPORT_BODY, errors={
+            404: _NO_BOARD,
+            413: f"The body is over {IMPORT_BODY.max_bytes} bytes, or its record over "
+                 f"{limits.MAX_RECORD_BYTES}.",
+            422: "The submission is not valid (field-level `detail`), or its run does not "
+                 "belong on this board (`BoardMismatch`)."},
+        also={200: _json_response("The submission was already on the board; nothing changed.",
+                                  ImportReceipt)}),
+    **_ADMIN,
+)
+@takes(IMPORT_BODY)
+def import_submission(board: BoardId,
+                      item: Annotated[ImportedSubmission, Body(description="A submission line of "
+                                                                           "an export: its record "
+                                                                           "and `submitted_at`.")],
+                      service: Service) -> Response[ImportReceipt]:
+    _check_record_size(item.record)
+    receipt = service.import_submission(_segment(board), item)
+    return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
+
+
 # ---- errors: the one place where domain errors become HTTP statuses ---------------------------
 
 #: Checked in order: the first class the error is an instance of gives its status.
@@ -279,6 +589,11 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (RacerNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
     (TooSoon, HTTPStatus.TOO_MANY_REQUESTS),
+    (BoardClosed, HTTPStatus.FORBIDDEN),
+    (SubmissionLimitReached, HTTPStatus.FORBIDDEN),
+    (NotAuthorized, HTTPStatus.FORBIDDEN),
+    (BoardExists, HTTPStatus.CONFLICT),
+    (BoardLocked, HTTPStatus.CONFLICT),
 )
 
 
@@ -289,7 +604,24 @@ def status_of(error: DomainError) -> HTTPStatus:
     return HTTPStatus.BAD_REQUEST  # a domain error is raised on purpose: the request is at fault
 
 
-def _problems(errors: Sequence[Any]) -> tuple[str, list[dict[str, str]]]:
+def error_headers(error: DomainError) -> dict[str, str] | None:
+    """The headers an error answer carries: Retry-After for a cooldown."""
+    return {"Retry-After": str(max(0, error.retry_after_s))} if isinstance(error, TooSoon) else None
+
+
+def error_body(error: DomainError) -> ErrorBody:
+    """The JSON body of a domain error's answer (``drboard serve`` answers its own refusals
+    with it, too)."""
+    return ErrorBody.model_validate({"error": type(error).__name__, "message": error.message,
+                                     "detail": _field_problems(error.detail)})
+
+
+def _field_problems(detail: Sequence[dict[str, str]]) -> list[dict[str, str]]:
+    return [{"loc": str(d.get("loc", "")), "msg": str(d.get("msg", "")),
+             "type": str(d.get("type", "value_error"))} for d in detail]
+
+
+def _problems(errors: Sequence[Any], body: RequestBody) -> tuple[str, list[dict[str, str]]]:
     """Pydantic's errors as field problems, and where they are (body, query, path)."""
     where = "body"
     problems = []
@@ -303,21 +635,18 @@ def _problems(errors: Sequence[Any]) -> tuple[str, list[dict[str, str]]]:
         if kind == "json_invalid":  # its loc is the character where parsing stopped
             reason = (error.get("ctx") or {}).get("error") or msg
             msg, loc = f"{reason} at character {loc[0] if loc else 0}", []
-        problems.append({"loc": field_path(loc) or ("record" if where == "body" else where),
+        problems.append({"loc": field_path(loc) or (body.name if where == "body" else where),
                          "msg": msg, "type": kind})
     return where, problems
 
 
-def _answer(app: APIGatewayHttpResolver, status: HTTPStatus, error: str, message: str,
-            detail: list[dict[str, str]] | None = None,
-            headers: dict[str, str] | None = None) -> Response[Any]:
-    problems = [{"loc": str(d.get("loc", "")), "msg": str(d.get("msg", "")),
-                 "type": str(d.get("type", "value_error"))} for d in detail or []]
-    body = ErrorBody.model_validate({"error": error, "message": message, "detail": problems})
+def _answer(app: APIGatewayHttpResolver, error: DomainError) -> Response[Any]:
+    status = status_of(error)
+    headers = error_headers(error)
     if _is_page_request(app):
-        return _page(web.error_page(status.value, status.phrase, message), status, headers)
+        return _page(web.error_page(status.value, status.phrase, error.message), status, headers)
     return Response(status_code=status, content_type=content_types.APPLICATION_JSON,
-                    body=body.model_dump(mode="json"), headers=headers)
+                    body=error_body(error).model_dump(mode="json"), headers=headers)
 
 
 def _is_page_request(app: APIGatewayHttpResolver) -> bool:
@@ -328,28 +657,38 @@ def _is_page_request(app: APIGatewayHttpResolver) -> bool:
 def _register_error_handlers(app: APIGatewayHttpResolver) -> None:
     @app.exception_handler(DomainError)
     def domain_error(error: DomainError) -> Response[Any]:
-        status = status_of(error)
-        headers = {"Retry-After": str(max(0, error.retry_after_s))} if isinstance(error, TooSoon) else None
-        return _answer(app, status, type(error).__name__, error.message, error.detail, headers)
+        return _answer(app, error)
 
     @app.exception_handler(RequestValidationError)
     def invalid_request(error: RequestValidationError) -> Response[Any]:
-        where, problems = _problems(error.errors())
+        body = _route_body(app)
+        where, problems = _problems(error.errors(), body)
         if where == "body":
             json_error = next((p for p in problems if p["type"] == "json_invalid"), None)
             if json_error:
-                return _answer(app, HTTPStatus.UNPROCESSABLE_ENTITY, InvalidSubmission.__name__,
-                               "the request body is not valid JSON", [json_error])
+                return _answer_unprocessable(app, body, "the request body is not valid JSON",
+                                             [json_error])
             count = f" ({len(problems)} problems)" if len(problems) > 1 else ""
-            return _answer(app, HTTPStatus.UNPROCESSABLE_ENTITY, InvalidSubmission.__name__,
-                           f"the record is invalid{count}", problems)
-        return _answer(app, HTTPStatus.BAD_REQUEST, InvalidQuery.__name__,
-                       f"invalid {where} parameter", problems)
+            verb = "are" if body.name.endswith("s") else "is"
+            return _answer_unprocessable(app, body, f"{body.what} {verb} invalid{count}", problems)
+        return _answer(app, InvalidQuery(f"invalid {where} parameter", detail=problems))
 
     @app.exception_handler(RequestUnsupportedContentType)
     def unsupported_body(error: RequestUnsupportedContentType) -> Response[Any]:
-        return _answer(app, HTTPStatus.UNSUPPORTED_MEDIA_TYPE, InvalidSubmission.__name__,
-                       "send the record as application/json")
+        body = _route_body(app)
+        return _answer_unprocessable(app, body, f"send {body.what} as application/json",
+                                     status=HTTPStatus.UNSUPPORTED_MEDIA_TYPE)
+
+
+def _answer_unprocessable(app: APIGatewayHttpResolver, body: RequestBody, message: str,
+                          detail: list[dict[str, str]] | None = None,
+                          status: HTTPStatus = HTTPStatus.UNPROCESSABLE_ENTITY) -> Response[Any]:
+    """A body that is not the route's model: 422 (415 for another content type), named as the
+    domain error of that kind of body (``InvalidSubmission`` for records)."""
+    problem = ErrorBody.model_validate({"error": body.invalid.__name__, "message": message,
+                                        "detail": detail or []})
+    return Response(status_code=status, content_type=content_types.APPLICATION_JSON,
+                    body=problem.model_dump(mode="json"))
 
 
 # ---- the resolver -----------------------------------------------------------------------------
@@ -360,11 +699,16 @@ def build_app(*routers: Router) -> APIGatewayHttpResolver:
 
     Give each resolver its own call: a Router serves the resolver that included it last, which
     is fine because the routes read only the resolver's own request and context."""
+    app: APIGatewayHttpResolver
+
+    def parse_body(body: str) -> Any:
+        return bounded_json(body, _route_body(app))
+
     app = APIGatewayHttpResolver(
         cors=CORSConfig(allow_origin="*", allow_headers=["Content-Type"], max_age=600),
         enable_validation=True,
         response_validation_error_http_code=HTTPStatus.INTERNAL_SERVER_ERROR,
-        json_body_deserializer=bounded_json,
+        json_body_deserializer=parse_body,
     )
     for router in routers:
         app.include_router(router)
@@ -375,14 +719,16 @@ def build_app(*routers: Router) -> APIGatewayHttpResolver:
         summary="A collaborative leaderboard for AWS DeepRacer racers.",
         description="Push a model's evaluation as a record; read the standings, each racer's "
                     "history and how the fast models were built. Reads are public; submissions "
-                    "are signed with SigV4 (IAM).",
-        servers=[Server(url="/")],
-        tags=["submissions", "boards", "pages"],
-        security_schemes={SIGV4: APIKey.model_validate({
-            "type": "apiKey", "name": "Authorization", "in": APIKeyIn.header.value,
+                    "and the organisers' routes (tag `admin`) are signed with SigV4 (IAM).",
+        tags=["submissions", "boards", "racers", ADMIN_TAG, "pages"],
+        # Plain data, which Powertools validates as an APIKey when it builds the document: its
+        # OpenAPI models cost a cold start ~40 ms to import, for a document the functions never
+        # serve. (No servers: Powertools' default is the same single "/".)
+        security_schemes=cast("dict[str, SecurityScheme]", {SIGV4: {
+            "type": "apiKey", "name": "Authorization", "in": "header",
             "description": "AWS Signature Version 4 (API Gateway IAM authorisation).",
             "x-amazon-apigateway-authtype": "awsSigv4",
-        })},
+        }}),
     )
     return app
 
@@ -391,13 +737,13 @@ _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
 
 
 def openapi_document() -> str:
-    """The OpenAPI document of both functions' routes, as committed in functions/openapi.json.
+    """The OpenAPI document of the three functions' routes, as committed in functions/openapi.json.
 
-    It is Powertools' document for ``build_app(push_router, pull_router)`` less one thing that
-    is not true of this API: the default "422 Validation Error" Powertools lists on every
-    validated route. Here a bad query or path parameter answers 400 and a bad body 422, both
-    with an :class:`ErrorBody`, and the routes list those responses themselves."""
-    document = json.loads(build_app(push_router, pull_router).get_openapi_json_schema())
+    It is Powertools' document for ``build_app(push_router, pull_router, admin_router)`` less one
+    thing that is not true of this API: the default "422 Validation Error" Powertools lists on
+    every validated route. Here a bad query or path parameter answers 400 and a bad body 422,
+    both with an :class:`ErrorBody`, and the routes list those responses themselves."""
+    document = json.loads(build_app(push_router, pull_router, admin_router).get_openapi_json_schema())
     for operations in document["paths"].values():
         for operation in operations.values():
             default = operation["responses"].get("422", {})

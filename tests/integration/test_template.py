@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import json
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -25,7 +26,7 @@ from tests.tablekit import create_board_table
 
 ROOT = Path(__file__).parents[2]
 EVENTS = ROOT / "events"
-FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull"}
+FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull", "AdminFunction": "admin"}
 
 
 @pytest.fixture(scope="module")
@@ -45,12 +46,18 @@ def cloudformation(sam: dict[str, Any]) -> dict[str, Any]:
     return translated
 
 
-def _app_routes(kind: str) -> set[tuple[str, str]]:
-    from drboard_functions.routes import build_app, pull_router, push_router
+def _app_operations(kind: str) -> dict[tuple[str, str], dict[str, Any]]:
+    """(METHOD, path) -> OpenAPI operation of the routes the function's resolver serves."""
+    from drboard_functions.routes import admin_router, build_app, pull_router, push_router
 
-    app = build_app(push_router if kind == "push" else pull_router)
-    paths = json.loads(app.get_openapi_json_schema())["paths"]
-    return {(method.upper(), path) for path, methods in paths.items() for method in methods}
+    router = {"push": push_router, "pull": pull_router, "admin": admin_router}[kind]
+    paths = json.loads(build_app(router).get_openapi_json_schema())["paths"]
+    return {(method.upper(), path): operation for path, methods in paths.items()
+            for method, operation in methods.items()}
+
+
+def _app_routes(kind: str) -> set[tuple[str, str]]:
+    return set(_app_operations(kind))
 
 
 def _template_routes(sam: dict[str, Any], function: str) -> set[tuple[str, str]]:
@@ -64,18 +71,56 @@ def test_each_function_serves_the_routes_its_resolver_has(sam: dict[str, Any], f
     assert _template_routes(sam, function) == _app_routes(FUNCTIONS[function])
 
 
-def test_only_the_push_route_requires_iam_authorisation(cloudformation: dict[str, Any]) -> None:
+def test_every_route_of_the_code_has_one_function_in_the_template(sam: dict[str, Any]) -> None:
+    from drboard_functions.routes import openapi_document
+
+    documented = {(method.upper(), path) for path, methods in json.loads(openapi_document())["paths"].items()
+                  for method in methods}
+    served = [route for function in FUNCTIONS for route in _template_routes(sam, function)]
+    assert sorted(served) == sorted(documented), "each route once, by the function that has it"
+    functions = [name for name, r in sam["Resources"].items() if r["Type"] == "AWS::Serverless::Function"]
+    assert sorted(functions) == sorted(FUNCTIONS)
+
+
+def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
+        cloudformation: dict[str, Any]) -> None:
+    signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
+              if operation.get("security") == [{"sigv4": []}]}
+    assert ("POST", "/boards/{board}/submissions") in signed
+    assert len(signed) == 9, "the push and the eight organiser routes"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
+    seen = set()
     for path, methods in paths.items():
         for method, operation in methods.items():
             if method == "x-amazon-apigateway-any-method":
                 continue
+            seen.add((method.upper(), path))
             auth = operation.get("security") or operation.get("x-amazon-apigateway-auth")
-            if (method, path) == ("post", "/boards/{board}/submissions"):
-                assert auth == {"type": "AWS_IAM"} or auth == [{"AWS_IAM": []}], auth
+            if (method.upper(), path) in signed:
+                assert auth == {"type": "AWS_IAM"} or auth == [{"AWS_IAM": []}], (method, path, auth)
             else:
                 assert not auth, (method, path, auth)
+    assert signed <= seen
+
+
+def test_cors_only_lets_browsers_read(sam: dict[str, Any]) -> None:
+    cors = sam["Resources"]["BoardApi"]["Properties"]["CorsConfiguration"]
+    assert cors["AllowMethods"] == ["GET", "OPTIONS"]
+    assert cors["AllowHeaders"] == ["Content-Type"], "no Authorization, no X-Amz-*: no signed calls"
+    assert not cors.get("AllowCredentials")
+
+
+def test_every_function_has_its_handler_and_its_build_target(sam: dict[str, Any]) -> None:
+    makefile = (ROOT / "Makefile").read_text()
+    for name, kind in FUNCTIONS.items():
+        properties = sam["Resources"][name]["Properties"]
+        assert properties["Handler"] == f"drboard_functions.handlers.{kind}.lambda_handler"
+        handler = ROOT / "functions" / "drboard_functions" / "handlers" / f"{kind}.py"
+        assert "\ndef lambda_handler(" in handler.read_text()
+        assert sam["Resources"][name]["Metadata"]["BuildMethod"] == "makefile"
+        targets = re.search(rf"^(build-\w+ )*build-{name}( build-\w+)*:", makefile, re.MULTILINE)
+        assert targets, f"the Makefile has no build-{name} target"
 
 
 def test_functions_run_on_python_313_arm64(cloudformation: dict[str, Any]) -> None:
@@ -186,12 +231,17 @@ def deployed(aws: CallRecorder, sam: dict[str, Any]) -> dict[str, str]:
     return names
 
 
-def _invoke(kind: str, event_file: str) -> dict[str, Any]:
-    from drboard_functions.handlers import pull, push, wiring
+def _invoke(kind: str, event_file: str, query: dict[str, str] | None = None) -> dict[str, Any]:
+    """Run a function's handler on an example event (with this query string instead, if given),
+    as a fresh container would: the wiring reads the environment again."""
+    from drboard_functions.handlers import admin, pull, push, wiring
 
     wiring.service_from_environment.cache_clear()
-    handler = push.lambda_handler if kind == "push" else pull.lambda_handler
+    handler = {"push": push, "pull": pull, "admin": admin}[kind].lambda_handler
     event = json.loads((EVENTS / event_file).read_text())
+    if query is not None:
+        event["queryStringParameters"] = query
+        event["rawQueryString"] = "&".join(f"{name}={value}" for name, value in query.items())
     result: dict[str, Any] = handler(event, LocalContext())
     return result
 
@@ -234,3 +284,58 @@ def test_pull_works_with_its_template_environment_and_permissions(
     assert used <= granted, f"calls not allowed by the template: {used - granted}"
     assert not any(action.startswith(("s3:", "dynamodb:Put", "dynamodb:Update"))
                    for action, _ in granted), "the pull function only reads"
+
+
+def test_admin_works_with_its_template_environment_and_permissions(
+    cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _isolate(monkeypatch, _environment(cloudformation, "AdminFunction", deployed))
+    for event_file, status in [
+        ("admin_create_board.json", 201), ("admin_update_board.json", 200),
+        ("admin_close_board.json", 200), ("admin_delete_board.json", 200),
+        ("admin_restore_board.json", 200),
+        ("admin_import_board.json", 201), ("admin_import_board.json", 200),
+        ("admin_import_submission.json", 201), ("admin_import_submission.json", 200),
+    ]:
+        result = _invoke("admin", event_file)
+        assert result["statusCode"] == status, (event_file, result["body"][:300])
+
+    records = []
+    cursor: str | None = None
+    while True:  # every page of the export, the records read with BatchGetItem
+        result = _invoke("admin", "admin_export_board.json", {"cursor": cursor} if cursor else None)
+        assert result["statusCode"] == 200, result["body"][:300]
+        page = json.loads(result["body"])
+        records += [line["record"]["submission_id"] for line in page["lines"] if line["kind"] == "submission"]
+        cursor = page["next_cursor"]
+        if cursor is None:
+            break
+    used = set(aws.calls)
+    imported = json.loads(json.loads((EVENTS / "admin_import_submission.json").read_text())["body"])
+    assert records == [imported["record"]["submission_id"]]
+    archived = boto3.client("s3").list_objects_v2(Bucket=deployed["ArchiveBucket"])
+    assert archived["KeyCount"] == 1, "an imported record is archived like a pushed one"
+
+    granted = _granted(cloudformation, "AdminFunction")
+    assert used <= granted, f"calls not allowed by the template: {used - granted}"
+    assert {action for action, _ in used} == {action for action, _ in granted}, (
+        "least privilege: every action granted is one the organiser routes use")
+    assert ("dynamodb:BatchGetItem", "table") in used
+
+
+def test_the_racer_routes_read_with_the_pull_functions_permissions(
+    cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _isolate(monkeypatch, _environment(cloudformation, "PushFunction", deployed))
+    assert _invoke("push", "push.json")["statusCode"] == 201
+    aws.calls.clear()
+    _isolate(monkeypatch, _environment(cloudformation, "PullFunction", deployed))
+    status = json.loads(_invoke("pull", "pull_racer_status.json")["body"])
+    assert [entry["board"]["board_id"] for entry in status["boards"]] == ["reInvent2019_track"]
+    history = json.loads(_invoke("pull", "pull_racer_history.json")["body"])
+    assert len(history["history"]) == 1
+    used = set(aws.calls)
+    assert ("dynamodb:Query", "index") in used, "a racer's history is one query of the by_racer index"
+    assert used <= _granted(cloudformation, "PullFunction")

@@ -12,7 +12,7 @@ from functools import cache
 from pathlib import Path
 
 import pytest
-from drboard_assembler import Overrides, Record, assemble
+from drboard_assembler import AssemblyError, Overrides, Record, assemble, evaluation_files, planned_trials
 from drboard_assembler.record import RaceType, SourceLayout
 
 EXAMPLES = Path(__file__).parents[2] / "examples"
@@ -240,3 +240,71 @@ def test_tarball_of_an_example_assembles_to_the_same_record(name: str, tmp_path:
     from_folder = record_of(name)
     assert from_archive.submission_id == from_folder.submission_id
     assert json.loads(from_archive.model_dump_json()) == json.loads(from_folder.model_dump_json())
+
+
+# ---- one evaluation at a time (`push --watch`) ----------------------------------------------
+
+
+def test_evaluation_files_are_listed_relative_to_the_run_folder() -> None:
+    assert evaluation_files(EXAMPLES / "drifter-ppo-drfc") == [
+        "metrics/EvaluationMetrics-20230518205533.json",
+        "metrics/EvaluationMetrics-20230518210841.json",
+        "metrics/EvaluationMetrics-20230518212207.json",
+    ]
+    assert evaluation_files(EXAMPLES / "comet-sac-drfc") == [
+        "metrics/evaluation/evaluation-20240315093012.json",
+        "metrics/evaluation/evaluation-20240315101544.json",
+    ]
+
+
+@pytest.mark.parametrize("name", ["drifter-ppo-drfc", "comet-sac-drfc", "blaze-ppo-droa"])
+def test_one_evaluation_is_the_record_of_the_folder_with_only_that_file(name: str,
+                                                                        tmp_path: Path) -> None:
+    evaluations = evaluation_files(EXAMPLES / name)
+    for number, evaluation in enumerate(evaluations):
+        alone = tmp_path / str(number) / name
+        shutil.copytree(EXAMPLES / name, alone)
+        for other in set(evaluations) - {evaluation}:
+            (alone / other).unlink()
+
+        record = assemble(EXAMPLES / name, evaluation=evaluation)
+
+        assert [run.source for run in record.evaluations] == [evaluation]
+        assert record == assemble(alone)
+
+
+def test_each_evaluation_is_a_submission_of_its_own_and_stays_the_same() -> None:
+    folder = EXAMPLES / "drifter-ppo-drfc"
+    ids = [assemble(folder, evaluation=e).submission_id for e in evaluation_files(folder)]
+    assert len(set(ids)) == 3
+    assert ids[0] == assemble(folder, evaluation=evaluation_files(folder)[0]).submission_id
+    assert record_of("drifter-ppo-drfc").submission_id not in ids
+
+
+def test_one_evaluation_of_an_archive(tmp_path: Path) -> None:
+    archive = tmp_path / "drifter-ppo-drfc.tar.gz"
+    with tarfile.open(archive, "w:gz") as tar:
+        tar.add(EXAMPLES / "drifter-ppo-drfc", arcname="drifter-ppo-drfc")
+    evaluation = "metrics/EvaluationMetrics-20230518210841.json"
+    assert assemble(archive, evaluation=evaluation) == assemble(EXAMPLES / "drifter-ppo-drfc",
+                                                                evaluation=evaluation)
+
+
+@pytest.mark.parametrize("evaluation", ["metrics/evaluation/missing.json",
+                                        "metrics/TrainingMetrics.json",
+                                        "evaluation-20240315101544.json"])
+def test_an_evaluation_the_folder_does_not_hold_is_named_in_the_error(evaluation: str) -> None:
+    with pytest.raises(AssemblyError) as caught:
+        assemble(EXAMPLES / "comet-sac-drfc", evaluation=evaluation)
+    assert str(caught.value) == (f"comet-sac-drfc: {evaluation}: no such evaluation metrics file "
+                                 "in the run folder")
+
+
+def test_planned_trials_come_from_the_parameters_naming_the_evaluation() -> None:
+    comet = EXAMPLES / "comet-sac-drfc"
+    assert planned_trials(comet, "metrics/evaluation/evaluation-20240315101544.json") == 3
+    assert planned_trials(comet, "metrics/evaluation/evaluation-20240315093012.json") is None
+    speedy = EXAMPLES / "speedy-ppo-console"  # the console quotes every value
+    assert planned_trials(speedy, evaluation_files(speedy)[0]) == 3
+    blaze = EXAMPLES / "blaze-ppo-droa"  # an evaluation's parameters in training_params.yaml
+    assert [planned_trials(blaze, e) for e in evaluation_files(blaze)] == [None, 5]

@@ -190,16 +190,3 @@ def test_db_option_and_environment_choose_the_board_file(
 def test_default_board_lives_in_the_user_data_folder(runner: CliRunner, user_dirs: Path) -> None:
     run(runner, "push", EXAMPLES[0])
     assert list(user_dirs.rglob("board.db"))
-
-
-@pytest.mark.parametrize("command", ["assemble", "push", "pull", "boards", "history", "show"])
-def test_every_command_has_help(runner: CliRunner, command: str) -> None:
-    code, out, _ = run(runner, command, "--help")
-    assert code == 0
-    assert "Usage:" in out
-
-
-def test_every_command_is_in_the_readme() -> None:
-    readme = (Path(__file__).parents[2] / "README.md").read_text()
-    for command in cli.commands:  # type: ignore[attr-defined]
-        assert f"drboard {command}" in readme, command

@@ -22,7 +22,8 @@ os.environ.setdefault("POWERTOOLS_TRACE_DISABLED", "true")
 
 import boto3
 from drboard_assembler.record import Record
-from drboard_functions.handlers import pull, push, wiring
+from drboard_functions.handlers import admin, pull, push, wiring
+from drboard_functions.models import BoardView, ExportedSubmission, ExportPage
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
@@ -30,7 +31,10 @@ from moto import mock_aws
 
 EVENTS = Path(__file__).parents[2] / "events"
 PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_racer.json",
-               "pull_view.json"]
+               "pull_view.json", "pull_racer_status.json", "pull_racer_history.json"]
+ADMIN_EVENTS = ["admin_create_board.json", "admin_update_board.json", "admin_close_board.json",
+                "admin_delete_board.json", "admin_restore_board.json", "admin_import_board.json",
+                "admin_import_submission.json", "admin_export_board.json"]
 REGION = "eu-west-1"
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
@@ -66,6 +70,14 @@ def test_the_events_are_api_gateway_http_api_v2_events() -> None:
         for name, value in (event.get("pathParameters") or {}).items():
             assert "{" + name + "}" in route and value in event["rawPath"]
     assert "iam" in load("push.json")["requestContext"]["authorizer"]
+    assert set(ADMIN_EVENTS) | set(PULL_EVENTS) | {"push.json"} == {p.name for p in EVENTS.glob("*.json")}
+    for name in ADMIN_EVENTS:  # organiser requests are signed, and API Gateway says by whom
+        assert load(name)["requestContext"]["authorizer"]["iam"]["userArn"], name
+        assert load(name)["headers"]["authorization"].startswith("AWS4-HMAC-SHA256 "), name
+    for name in PULL_EVENTS:
+        assert "authorizer" not in load(name)["requestContext"], name
+    imported = json.loads(load("admin_import_submission.json")["body"])["record"]
+    assert Record.model_validate(imported) == event_record(), "the same run as push.json's"
 
 
 def test_push_stores_the_event_record_then_sees_the_duplicate(
@@ -122,10 +134,85 @@ def test_pull_events_answer_what_each_route_promises(service: LeaderboardService
     index = pull.lambda_handler(load("pull_index.json"), context)
     assert "Smile Speedway" in index["body"]
 
+    status = json.loads(pull.lambda_handler(load("pull_racer_status.json"), context)["body"])
+    assert [(s["board"]["board_id"], s["entry"]["rank"]) for s in status["boards"]] == [(record.track, 1)]
+
+    history = json.loads(pull.lambda_handler(load("pull_racer_history.json"), context)["body"])
+    assert [item["submission_id"] for item in history["history"]] == [record.submission_id]
+
 
 def test_the_pull_function_does_not_take_submissions(service: LeaderboardService) -> None:
     response = pull.lambda_handler(load("push.json"), FakeLambdaContext())
     assert response["statusCode"] == 404
+    assert service.boards() == []
+
+
+# ---- the admin function ------------------------------------------------------------------------
+
+
+def admin_call(name: str) -> tuple[int, dict[str, Any]]:
+    response = admin.lambda_handler(load(name), FakeLambdaContext())
+    return response["statusCode"], json.loads(response["body"])
+
+
+def test_an_organiser_manages_the_winter_cup_with_the_admin_events(
+        service: LeaderboardService, caplog: pytest.LogCaptureFixture) -> None:
+    status, created = admin_call("admin_create_board.json")
+    assert status == 201, created
+    cup = BoardView.model_validate(created)
+    assert (cup.board_id, cup.track, cup.cooldown_s, cup.max_submissions) == (
+        "winter-cup-2026", "reInvent2019_track", 900, 20)
+    [audit] = [r for r in caplog.records if r.getMessage() == "OrganiserRequest"]
+    assert (audit.route, audit.status, audit.caller) == (  # type: ignore[attr-defined]
+        "POST /boards", 201, "arn:aws:sts::123456789012:assumed-role/drboard-organisers/ada")
+
+    status, updated = admin_call("admin_update_board.json")  # closes later; no maximum any more
+    assert status == 200, updated
+    changed = BoardView.model_validate(updated)
+    assert (changed.closes_at.isoformat() if changed.closes_at else None,
+            changed.max_submissions, changed.cooldown_s) == ("2026-12-22T17:00:00+00:00", None, 900)
+
+    assert admin_call("admin_close_board.json")[1]["status"] == "CLOSED"
+    assert admin_call("admin_delete_board.json")[0] == 200
+    assert service.boards() == []
+    assert admin_call("admin_restore_board.json")[0] == 200
+    assert [b.board_id for b in service.boards()] == ["winter-cup-2026"]
+
+
+def test_an_organiser_imports_last_seasons_cup_and_exports_it(service: LeaderboardService) -> None:
+    assert admin_call("admin_import_board.json")[0] == 201
+    assert admin_call("admin_import_board.json")[0] == 200  # it exists: nothing changes
+    status, receipt = admin_call("admin_import_submission.json")
+    assert (status, receipt["status"]) == (201, "created")
+    assert admin_call("admin_import_submission.json")[1]["status"] == "duplicate"
+
+    status, exported = admin_call("admin_export_board.json")
+    assert status == 200
+    page = ExportPage.model_validate(exported)
+    assert page.lines[0].kind == "board"
+    records = []
+    while page.next_cursor:  # the export's later pages, as `drboard export` asks for them
+        event = load("admin_export_board.json")
+        event["queryStringParameters"] = {"cursor": page.next_cursor}
+        event["rawQueryString"] = f"cursor={page.next_cursor}"
+        page = ExportPage.model_validate(json.loads(admin.lambda_handler(event, FakeLambdaContext())["body"]))
+        records += [line.record for line in page.lines if isinstance(line, ExportedSubmission)]
+    assert records == [event_record()]
+    history = service.history("Speedy", "spring-cup-2025")
+    assert [item.submitted_at.isoformat() for item in history] == ["2025-04-12T11:40:05.120000+00:00"]
+
+
+def test_the_admin_function_takes_neither_pushes_nor_reads(service: LeaderboardService) -> None:
+    for name in ("push.json", "pull_boards.json", "pull_board.json"):
+        response = admin.lambda_handler(load(name), FakeLambdaContext())
+        assert response["statusCode"] == 404, name
+    assert service.boards() == []
+
+
+@pytest.mark.parametrize("name", ADMIN_EVENTS)
+def test_no_other_function_answers_organiser_events(service: LeaderboardService, name: str) -> None:
+    for handler in (push.lambda_handler, pull.lambda_handler):
+        assert handler(load(name), FakeLambdaContext())["statusCode"] in (404, 405), name
     assert service.boards() == []
 
 

@@ -40,7 +40,48 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("GET", "/boards/{board}"),
         ("GET", "/boards/{board}/racers/{racer}"),
         ("GET", "/boards/{board}/view"),
+        ("GET", "/racers/{racer}"),
+        ("GET", "/racers/{racer}/submissions"),
+        ("POST", "/boards"),
+        ("PATCH", "/boards/{board}"),
+        ("DELETE", "/boards/{board}"),
+        ("POST", "/boards/{board}/close"),
+        ("POST", "/boards/{board}/restore"),
+        ("GET", "/boards/{board}/export"),
+        ("PUT", "/boards/{board}/import"),
+        ("POST", "/boards/{board}/imports"),
     }
+
+
+def test_every_organiser_route_is_signed_and_lists_its_refusals(document: dict[str, Any]) -> None:
+    admin = [(method, path, operation) for path, item in document["paths"].items()
+             for method, operation in item.items() if "admin" in operation["tags"]]
+    assert len(admin) == 8
+    for method, path, operation in admin:
+        assert operation["security"] == [{"sigv4": []}], (method, path)
+        assert {"400", "403"} <= set(operation["responses"]), (method, path)
+        if "requestBody" in operation:
+            assert {"413", "415", "422"} <= set(operation["responses"]), (method, path)
+    public = [operation for item in document["paths"].values() for operation in item.values()
+              if "admin" not in operation["tags"] and "submissions" not in operation["tags"]]
+    assert all("security" not in operation for operation in public), "reads stay public"
+
+
+def test_the_organiser_bodies_are_their_models(document: dict[str, Any]) -> None:
+    def body(method: str, path: str) -> str:
+        schema = document["paths"][path][method]["requestBody"]["content"]["application/json"]["schema"]
+        return str(schema["$ref"].rsplit("/", 1)[1])
+
+    assert body("post", "/boards") == "BoardSpec"
+    assert body("patch", "/boards/{board}") == "BoardChanges"
+    assert body("put", "/boards/{board}/import") == "Board"
+    assert body("post", "/boards/{board}/imports") == "ImportedSubmission"
+    for method, path, created in [("post", "/boards", {"201"}),
+                                  ("put", "/boards/{board}/import", {"200", "201"}),
+                                  ("post", "/boards/{board}/imports", {"200", "201"})]:
+        assert created <= set(document["paths"][path][method]["responses"])
+    assert "409" in document["paths"]["/boards"]["post"]["responses"]
+    assert "409" in document["paths"]["/boards/{board}"]["patch"]["responses"]
 
 
 def test_the_push_body_is_a_record_and_its_answers_are_listed(document: dict[str, Any]) -> None:
@@ -49,7 +90,7 @@ def test_the_push_body_is_a_record_and_its_answers_are_listed(document: dict[str
     assert schema["$ref"].startswith("#/components/schemas/Record")
     record = document["components"]["schemas"][schema["$ref"].rsplit("/", 1)[1]]
     assert {"submission_id", "track", "racer", "evaluations", "design"} <= set(record["required"])
-    assert {"200", "201", "413", "422", "429"} <= set(push["responses"])
+    assert {"200", "201", "403", "413", "422", "429"} <= set(push["responses"])
     assert push["security"] == [{"sigv4": []}]
     assert document["components"]["securitySchemes"]["sigv4"]["x-amazon-apigateway-authtype"] == "awsSigv4"
 

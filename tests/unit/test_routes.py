@@ -6,6 +6,7 @@ Each test gets its own service and resolver; requests are API Gateway HTTP API (
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -16,9 +17,38 @@ import pytest
 from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, DependencyResolutionError
 from drboard_assembler import limits
 from drboard_assembler.record import Record
-from drboard_functions.errors import InvalidSubmission, TooSoon
-from drboard_functions.models import BoardPage, PushReceipt, RacerView
-from drboard_functions.routes import build_app, field_path, pull_router, push_router
+from drboard_functions.errors import (
+    BoardClosed,
+    BoardExists,
+    BoardLocked,
+    DomainError,
+    InvalidSubmission,
+    NotAuthorized,
+    SubmissionLimitReached,
+    TooSoon,
+)
+from drboard_functions.models import (
+    Board,
+    BoardPage,
+    BoardView,
+    ExportedBoard,
+    ExportedEntry,
+    ExportedSubmission,
+    ExportPage,
+    PushReceipt,
+    RacerHistory,
+    RacerSummary,
+    RacerView,
+)
+from drboard_functions.routes import (
+    IMPORT_BODY,
+    MAX_BOARD_BODY_BYTES,
+    admin_router,
+    build_app,
+    field_path,
+    pull_router,
+    push_router,
+)
 from drboard_functions.service import LeaderboardService, default_board_id
 from drboard_functions.stores.sqlite import SqliteStore
 
@@ -30,12 +60,18 @@ T0 = datetime(2025, 3, 1, 12, 0, tzinfo=UTC)
 
 
 class Clock:
+    """A second passes at every reading; ``advance`` moves time on, as a racer waiting would."""
+
     def __init__(self) -> None:
         self.calls = 0
+        self.waited = timedelta()
 
     def __call__(self) -> datetime:
         self.calls += 1
-        return T0 + timedelta(seconds=self.calls)
+        return T0 + self.waited + timedelta(seconds=self.calls)
+
+    def advance(self, seconds: int) -> None:
+        self.waited += timedelta(seconds=seconds)
 
 
 @pytest.fixture
@@ -47,7 +83,7 @@ def service() -> Iterator[LeaderboardService]:
 
 @pytest.fixture
 def app() -> APIGatewayHttpResolver:
-    return build_app(push_router, pull_router)
+    return build_app(push_router, pull_router, admin_router)
 
 
 class Client:
@@ -93,6 +129,16 @@ class Client:
 
     def get(self, path: str, **query: str) -> dict[str, Any]:
         return self.request("GET", path, query=query or None)
+
+    def send(self, method: str, path: str, body: Any = None, **query: str) -> dict[str, Any]:
+        """An organiser's request; a body that is not a string is sent as JSON."""
+        text = body if body is None or isinstance(body, str) else json.dumps(body)
+        return self.request(method, path, body=text, query=query or None)
+
+    @property
+    def clock(self) -> Clock:
+        assert isinstance(self.service.clock, Clock)
+        return self.service.clock
 
 
 @pytest.fixture
@@ -452,3 +498,502 @@ def test_a_form_body_is_refused(client: Client, content_type: str) -> None:
                               headers={"content-type": content_type})
     assert response["statusCode"] == 422
     assert client.service.boards() == []
+
+
+# ---- racers across boards ---------------------------------------------------------------------
+
+
+CUP = "spring-cup"
+
+
+def cup_spec(**settings: Any) -> dict[str, Any]:
+    return {"board_id": CUP, "title": "Spring Cup", "track": "reInvent2019"} | settings
+
+
+def create_cup(client: Client, **settings: Any) -> BoardView:
+    response = client.send("POST", "/boards", cup_spec(**settings))
+    assert response["statusCode"] == 201, response["body"]
+    return BoardView.model_validate(body(response))
+
+
+def test_a_racers_status_covers_each_board_they_pushed_to_latest_first(client: Client) -> None:
+    client.push(make_record("Ada Lovelace", lap(13000)))
+    client.push(make_record("Bob", lap(12000)))
+    client.push(make_record("Ada Lovelace", lap(12500), direction="cw"))
+    response = client.get(f"/racers/{quote('ada lovelace')}")
+    assert response["statusCode"] == 200
+    summary = RacerSummary.model_validate(body(response))
+    assert summary.racer == "Ada Lovelace"
+    assert [(s.board.board_id, s.entry.rank, s.entry.gap_ms, s.submissions) for s in summary.boards] == [
+        (TRACK + "_cw", 1, 0, 1), (TRACK, 2, 1000, 1)]
+    one = RacerSummary.model_validate(body(client.get("/racers/Ada%20Lovelace", board=TRACK)))
+    assert [s.board.board_id for s in one.boards] == [TRACK]
+
+
+def test_a_racers_status_says_what_the_board_still_allows(client: Client) -> None:
+    create_cup(client, cooldown_s=600, max_submissions=3)
+    client.push(make_record("Ada"), board=CUP)
+    [status] = RacerSummary.model_validate(body(client.get("/racers/Ada", board=CUP))).boards
+    assert (status.submissions, status.submissions_left) == (1, 2)
+    assert status.next_submission_at is not None
+    assert status.next_submission_at - status.latest.submitted_at == timedelta(seconds=600)
+
+
+def test_a_racers_submissions_span_boards_oldest_first(client: Client) -> None:
+    client.push(make_record("Ada", lap(13000), model="first"))
+    client.push(make_record("Ada", lap(12000), model="second", direction="cw"))
+    client.push(make_record("Ada", lap(14000), model="third"))
+    response = client.get("/racers/ada/submissions")
+    assert response["statusCode"] == 200
+    history = RacerHistory.model_validate(body(response)).history
+    assert [(h.model_name, h.board_id, h.is_best) for h in history] == [
+        ("first", TRACK, True), ("second", TRACK + "_cw", True), ("third", TRACK, False)]
+    one = RacerHistory.model_validate(body(client.get("/racers/Ada/submissions", board=TRACK)))
+    assert [h.model_name for h in one.history] == ["first", "third"]
+
+
+def test_a_racer_without_submissions_has_an_empty_history(client: Client) -> None:
+    response = client.get("/racers/Nobody/submissions")
+    assert response["statusCode"] == 200
+    assert body(response) == {"racer": "Nobody", "history": []}
+
+
+@pytest.mark.parametrize(("path", "query", "error"), [
+    ("/racers/Nobody", {}, "RacerNotFound"),
+    ("/racers/Ada", {"board": "nowhere"}, "BoardNotFound"),
+    ("/racers/Ada/submissions", {"board": "nowhere"}, "BoardNotFound"),
+])
+def test_a_racer_or_board_that_is_not_there_is_404(client: Client, path: str, query: dict[str, str],
+                                                   error: str) -> None:
+    client.push(make_record("Ada"))
+    response = client.get(path, **query)
+    assert response["statusCode"] == 404
+    assert body(response)["error"] == error
+
+
+@pytest.mark.parametrize("path", ["/racers/" + "a" * 300, "/racers/Ada/submissions"])
+def test_a_racer_lookup_with_a_bad_parameter_is_400(client: Client, path: str) -> None:
+    response = client.get(path, board="b" * 300)
+    assert response["statusCode"] == 400
+    assert body(response)["error"] == "InvalidQuery"
+
+
+def test_racer_reads_are_public_and_carry_cors_headers(client: Client) -> None:
+    client.push(make_record("Ada"))
+    response = client.request("GET", "/racers/Ada", headers={"origin": "https://club.example.org"})
+    assert response["statusCode"] == 200
+    assert response["headers"]["Access-Control-Allow-Origin"] == "*"
+
+
+# ---- organisers: named boards -----------------------------------------------------------------
+
+
+def test_an_organiser_creates_a_named_board_that_racers_push_to(client: Client) -> None:
+    board = create_cup(client, method="TOTAL_TIME", cooldown_s=60, max_submissions=5,
+                       closes_at="2025-04-01T18:00:00+02:00")
+    assert (board.board_id, board.kind, board.track, board.method, board.min_laps, board.status) == (
+        CUP, "named", TRACK, "TOTAL_TIME", 3, "OPEN")
+    assert board.closes_at == datetime(2025, 4, 1, 16, 0, tzinfo=UTC)
+    assert [b["board_id"] for b in body(client.get("/boards"))["boards"]] == [CUP]
+    pushed = client.push(make_record("Ada", [(12000, 100)] * 3), board=CUP)
+    assert pushed["statusCode"] == 201
+    assert PushReceipt.model_validate(body(pushed)).entry.time_ms == 36000
+
+
+def test_a_board_id_already_taken_is_409(client: Client) -> None:
+    create_cup(client)
+    again = client.send("POST", "/boards", cup_spec(title="Another cup"))
+    assert again["statusCode"] == 409
+    assert body(again)["error"] == "BoardExists"
+    default = client.send("POST", "/boards", cup_spec(board_id=TRACK))
+    assert default["statusCode"] == 409
+    assert body(default)["error"] == "BoardExists"
+
+
+@pytest.mark.parametrize(("settings", "status", "loc"), [
+    ({"track": "Nowhere Speedway"}, 400, None),
+    ({"opens_at": "2025-04-01T00:00:00Z", "closes_at": "2025-03-01T00:00:00Z"}, 400, None),
+    ({"cooldown_s": -1}, 422, "cooldown_s"),
+    ({"board_id": "spring cup"}, 422, "board_id"),
+    ({"opens_at": "2025-04-01T00:00:00"}, 422, "opens_at"),  # no time zone
+    ({"colour": "red"}, 422, "colour"),
+])
+def test_a_bad_board_is_refused_and_nothing_is_created(client: Client, settings: dict[str, Any],
+                                                       status: int, loc: str | None) -> None:
+    response = client.send("POST", "/boards", cup_spec(**settings))
+    assert response["statusCode"] == status, response["body"]
+    answer = body(response)
+    assert answer["error"] == "InvalidQuery"
+    if loc:
+        assert answer["detail"][0]["loc"] == loc
+        assert answer["message"] == "the board is invalid"
+    assert body(client.get("/boards")) == {"boards": []}
+
+
+def test_the_board_bound_fits_the_longest_board_and_refuses_more_unparsed(client: Client) -> None:
+    longest = json.dumps(cup_spec(title="é" * 120, description="é" * 2000))  # escaped: 6 bytes each
+    assert 12_000 < len(longest) <= MAX_BOARD_BODY_BYTES
+    assert client.send("POST", "/boards", longest)["statusCode"] == 201
+    response = client.send("POST", "/boards", "{" * (MAX_BOARD_BODY_BYTES + 1))
+    assert response["statusCode"] == 413
+    assert str(MAX_BOARD_BODY_BYTES) in body(response)["message"]
+
+
+def test_a_change_names_only_what_changes_and_null_clears(client: Client) -> None:
+    create_cup(client, description="Spring", closes_at="2025-04-01T00:00:00Z", cooldown_s=600,
+               max_submissions=5)
+    response = client.send("PATCH", f"/boards/{CUP}", {"max_submissions": None})
+    assert response["statusCode"] == 200
+    board = BoardView.model_validate(body(response))
+    assert (board.max_submissions, board.cooldown_s, board.closes_at, board.description) == (
+        None, 600, datetime(2025, 4, 1, tzinfo=UTC), "Spring")
+
+    nothing = BoardView.model_validate(body(client.send("PATCH", f"/boards/{CUP}", {})))
+    assert nothing.model_dump(exclude={"status"}) == board.model_dump(exclude={"status"})
+
+    reopened = BoardView.model_validate(body(client.send(
+        "PATCH", f"/boards/{CUP}", {"closes_at": None, "title": "Spring Cup 2025"})))
+    assert (reopened.closes_at, reopened.title, reopened.cooldown_s, reopened.description) == (
+        None, "Spring Cup 2025", 600, "Spring")
+
+
+@pytest.mark.parametrize("field", ["title", "method"])
+def test_a_boards_title_and_method_cannot_be_cleared(client: Client, field: str) -> None:
+    create_cup(client)
+    response = client.send("PATCH", f"/boards/{CUP}", {field: None})
+    assert response["statusCode"] == 400
+    assert "cannot be cleared" in body(response)["message"]
+
+
+@pytest.mark.parametrize(("changes", "loc"), [
+    ({"cooldown_s": "soon"}, "cooldown_s"), ({"max_submissions": 0}, "max_submissions"),
+    ({"track": "Vegas_track"}, "track"), ({"closes_at": "tomorrow"}, "closes_at"),
+])
+def test_an_invalid_change_is_422_naming_the_field(client: Client, changes: dict[str, Any],
+                                                   loc: str) -> None:
+    create_cup(client, cooldown_s=600)
+    response = client.send("PATCH", f"/boards/{CUP}", changes)
+    assert response["statusCode"] == 422
+    answer = body(response)
+    assert (answer["error"], answer["message"], answer["detail"][0]["loc"]) == (
+        "InvalidQuery", "the changes are invalid", loc)
+    assert client.service.board_page(CUP).board.cooldown_s == 600
+
+
+def test_changes_sent_as_text_are_415_and_broken_json_422(client: Client) -> None:
+    create_cup(client)
+    text = client.request("PATCH", f"/boards/{CUP}", body="title=Mine",
+                          headers={"content-type": "text/plain"})
+    assert text["statusCode"] == 415
+    assert body(text)["message"] == "send the changes as application/json"
+    broken = client.send("PATCH", f"/boards/{CUP}", '{"title": ')
+    assert broken["statusCode"] == 422
+    assert body(broken)["message"] == "the request body is not valid JSON"
+
+
+def test_rescoring_a_board_with_entries_is_409_but_its_title_may_change(client: Client) -> None:
+    create_cup(client)
+    client.push(make_record("Ada"), board=CUP)
+    locked = client.send("PATCH", f"/boards/{CUP}", {"method": "AVG_LAP_TIME"})
+    assert locked["statusCode"] == 409
+    assert body(locked)["error"] == "BoardLocked"
+    assert client.send("PATCH", f"/boards/{CUP}", {"title": "Renamed"})["statusCode"] == 200
+
+
+@pytest.mark.parametrize(("method", "path", "payload"), [
+    ("PATCH", f"/boards/{TRACK}", {"title": "Mine"}),
+    ("POST", f"/boards/{TRACK}/close", None),
+    ("DELETE", f"/boards/{TRACK}", None),
+])
+def test_a_tracks_default_board_cannot_be_managed(client: Client, method: str, path: str,
+                                                  payload: Any) -> None:
+    client.push(make_record())
+    response = client.send(method, path, payload)
+    assert response["statusCode"] == 409
+    assert body(response)["error"] == "BoardLocked"
+
+
+@pytest.mark.parametrize(("method", "path", "payload"), [
+    ("PATCH", "/boards/nowhere", {"title": "Mine"}),
+    ("POST", "/boards/nowhere/close", None),
+    ("DELETE", "/boards/nowhere", None),
+    ("POST", "/boards/nowhere/restore", None),
+    ("GET", "/boards/nowhere/export", None),
+    ("POST", "/boards/nowhere/imports", {"submitted_at": "2025-02-01T10:00:00Z",
+                                         "record": make_record().model_dump(mode="json")}),
+])
+def test_managing_a_board_that_is_not_there_is_404(client: Client, method: str, path: str,
+                                                    payload: Any) -> None:
+    response = client.send(method, path, payload)
+    assert response["statusCode"] == 404, response["body"]
+    assert body(response)["error"] == "BoardNotFound"
+
+
+# ---- organisers: windows and limits, as racers meet them ---------------------------------------
+
+
+def test_a_closed_board_refuses_new_runs_with_403_but_answers_a_duplicate(client: Client) -> None:
+    create_cup(client)
+    record = make_record("Ada")
+    assert client.push(record, board=CUP)["statusCode"] == 201
+    closed = client.send("POST", f"/boards/{CUP}/close")
+    assert closed["statusCode"] == 200
+    assert BoardView.model_validate(body(closed)).status == "CLOSED"
+    refused = client.push(make_record("Bob"), board=CUP)
+    assert refused["statusCode"] == 403
+    assert body(refused)["error"] == "BoardClosed"
+    assert "closed" in body(refused)["message"]
+    assert client.push(record, board=CUP)["statusCode"] == 200
+    assert client.send("POST", f"/boards/{CUP}/close")["statusCode"] == 200  # closing again: as is
+
+
+def test_an_upcoming_board_refuses_runs_with_403(client: Client) -> None:
+    create_cup(client, opens_at=(T0 + timedelta(days=1)).isoformat())
+    refused = client.push(make_record("Ada"), board=CUP)
+    assert refused["statusCode"] == 403
+    assert body(refused)["error"] == "BoardClosed"
+    assert "not open yet" in body(refused)["message"]
+
+
+def test_a_cooldown_is_429_with_retry_after_then_the_racer_gets_in(client: Client) -> None:
+    create_cup(client, cooldown_s=600)
+    assert client.push(make_record("Ada", lap(13000)), board=CUP)["statusCode"] == 201
+    too_soon = client.push(make_record("Ada", lap(12000)), board=CUP)
+    assert too_soon["statusCode"] == 429
+    assert body(too_soon)["error"] == "TooSoon"
+    wait = int(too_soon["headers"]["Retry-After"])
+    assert 590 <= wait <= 600
+    assert client.push(make_record("Bob"), board=CUP)["statusCode"] == 201  # per racer
+    client.clock.advance(wait)
+    assert client.push(make_record("Ada", lap(12000)), board=CUP)["statusCode"] == 201
+
+
+def test_past_the_last_allowed_submission_is_403(client: Client) -> None:
+    create_cup(client, max_submissions=2)
+    for ms in (13000, 12500):
+        assert client.push(make_record("Ada", lap(ms)), board=CUP)["statusCode"] == 201
+    refused = client.push(make_record("Ada", lap(12000)), board=CUP)
+    assert refused["statusCode"] == 403
+    assert body(refused)["error"] == "SubmissionLimitReached"
+    assert "Retry-After" not in (refused.get("headers") or {})
+
+
+def test_a_deleted_board_disappears_until_it_is_restored(client: Client) -> None:
+    create_cup(client)
+    client.push(make_record("Ada"), board=CUP)
+    deleted = client.send("DELETE", f"/boards/{CUP}")
+    assert deleted["statusCode"] == 200
+    assert BoardView.model_validate(body(deleted)).board_id == CUP
+    assert client.get(f"/boards/{CUP}")["statusCode"] == 404
+    assert body(client.get("/boards")) == {"boards": []}
+    assert client.push(make_record("Bob"), board=CUP)["statusCode"] == 404
+    restored = client.send("POST", f"/boards/{CUP}/restore")
+    assert restored["statusCode"] == 200
+    page = BoardPage.model_validate(body(client.get(f"/boards/{CUP}")))
+    assert [e.racer for e in page.entries] == ["Ada"]
+
+
+# ---- organisers: export and import ------------------------------------------------------------
+
+
+def export_all(client: Client, board: str) -> tuple[list[Any], int]:
+    """Every line of a board's export, following the cursor; and how many pages it took."""
+    lines: list[Any] = []
+    cursor: str | None = None
+    pages = 0
+    while True:
+        response = client.send("GET", f"/boards/{board}/export", **({"cursor": cursor} if cursor else {}))
+        assert response["statusCode"] == 200, response["body"]
+        page = ExportPage.model_validate(body(response))
+        lines += page.lines
+        pages += 1
+        cursor = page.next_cursor
+        if cursor is None:
+            return lines, pages
+
+
+def standings(client: Client, board: str) -> list[tuple[int, str, int | None, datetime]]:
+    page = BoardPage.model_validate(body(client.get(f"/boards/{board}")))
+    return [(e.rank, e.racer, e.time_ms, e.submitted_at) for e in page.entries]
+
+
+def test_an_export_is_the_board_its_entries_then_every_submission_with_its_record(
+        client: Client) -> None:
+    create_cup(client)
+    records = [make_record("Ada", lap(13000)), make_record("Ada", lap(12000), model="m2"),
+               make_record("Bob", lap(12500))]
+    for record in records:
+        client.push(record, board=CUP)
+    lines, pages = export_all(client, CUP)
+    assert pages == 2
+    assert isinstance(lines[0], ExportedBoard)
+    assert lines[0].board.board_id == CUP
+    assert [line.entry.racer for line in lines if isinstance(line, ExportedEntry)] == ["Ada", "Bob"]
+    exported = {line.record.submission_id: line.record for line in lines
+                if isinstance(line, ExportedSubmission)}
+    assert exported == {record.submission_id: record for record in records}
+
+
+def test_an_export_imports_into_a_new_board_with_the_same_standings(client: Client) -> None:
+    create_cup(client, max_submissions=5)
+    for racer, ms in [("Ada", 13000), ("Bob", 12500), ("Ada", 12000)]:
+        client.push(make_record(racer, lap(ms)), board=CUP)
+    lines, _ = export_all(client, CUP)
+    copy = lines[0].board.model_copy(update={"board_id": "spring-cup-copy"})
+
+    created = client.send("PUT", "/boards/spring-cup-copy/import", copy.model_dump(mode="json"))
+    assert created["statusCode"] == 201, created["body"]
+    assert BoardView.model_validate(body(created)).max_submissions == 5
+    for line in lines:
+        if isinstance(line, ExportedSubmission):
+            item = {"submitted_at": line.submission.submitted_at.isoformat(),
+                    "record": line.record.model_dump(mode="json")}
+            first = client.send("POST", "/boards/spring-cup-copy/imports", item)
+            assert first["statusCode"] == 201, first["body"]
+            assert body(first)["status"] == "created"
+            again = client.send("POST", "/boards/spring-cup-copy/imports", item)
+            assert (again["statusCode"], body(again)["status"]) == (200, "duplicate")
+    assert standings(client, "spring-cup-copy") == standings(client, CUP)
+
+    existing = client.send("PUT", "/boards/spring-cup-copy/import",
+                           copy.model_copy(update={"title": "Other"}).model_dump(mode="json"))
+    assert existing["statusCode"] == 200
+    assert BoardView.model_validate(body(existing)).title == "Spring Cup"  # its own settings stay
+
+
+def test_an_imported_board_must_be_the_one_its_path_names(client: Client) -> None:
+    board = Board(board_id="elsewhere", kind="named", track=TRACK, title="Elsewhere",
+                  created_at=T0)
+    response = client.send("PUT", "/boards/spring-cup/import", board.model_dump(mode="json"))
+    assert response["statusCode"] == 400
+    assert body(response)["detail"][0]["loc"] == "board_id"
+    assert body(client.get("/boards")) == {"boards": []}
+
+
+def test_an_imported_board_is_validated_as_a_board(client: Client) -> None:
+    board = Board(board_id=CUP, kind="named", track=TRACK, title="Cup", created_at=T0)
+    exported = board.model_dump(mode="json") | {"title": ""}
+    response = client.send("PUT", f"/boards/{CUP}/import", exported)
+    assert response["statusCode"] == 422
+    assert (body(response)["error"], body(response)["detail"][0]["loc"]) == ("InvalidQuery", "title")
+
+
+def test_an_import_skips_the_window_and_limits_but_not_the_track(client: Client) -> None:
+    create_cup(client, max_submissions=1)
+    client.send("POST", f"/boards/{CUP}/close")
+    for model in ("m1", "m2"):
+        item = {"submitted_at": "2025-02-01T10:00:00Z",
+                "record": make_record("Ada", model=model).model_dump(mode="json")}
+        assert client.send("POST", f"/boards/{CUP}/imports", item)["statusCode"] == 201
+    elsewhere = {"submitted_at": "2025-02-01T10:00:00Z",
+                 "record": make_record("Bob", track="Vegas_track").model_dump(mode="json")}
+    response = client.send("POST", f"/boards/{CUP}/imports", elsewhere)
+    assert response["statusCode"] == 422
+    assert body(response)["error"] == "BoardMismatch"
+
+
+def test_an_imported_submission_without_a_time_zone_is_422(client: Client) -> None:
+    create_cup(client)
+    item = {"submitted_at": "2025-02-01T10:00:00", "record": make_record().model_dump(mode="json")}
+    response = client.send("POST", f"/boards/{CUP}/imports", item)
+    assert response["statusCode"] == 422
+    assert (body(response)["error"], body(response)["detail"][0]["loc"]) == (
+        "InvalidSubmission", "submitted_at")
+
+
+def imported_body(record: Record, padding: int = 0) -> str:
+    return ('{"submitted_at": "2025-02-01T10:00:00Z", "record": ' + record.model_dump_json()
+            + " " * padding + "}")
+
+
+def record_over_the_record_bound() -> Record:
+    """A valid record just over the record bound (many evaluation runs of many laps)."""
+    def sized(laps: int) -> Record:
+        specs: list[LapSpec] = [(12000 + n % 997, 100) for n in range(laps)]
+        return make_record("Ada", runs=[specs[i:i + 200] for i in range(0, laps, 200)])
+
+    small, large = len(sized(200).model_dump_json()), len(sized(400).model_dump_json())
+    laps = 200 + math.ceil((limits.MAX_RECORD_BYTES - small) * 200 / (large - small))
+    while len(sized(laps).model_dump_json()) <= limits.MAX_RECORD_BYTES:
+        laps += 1
+    return sized(laps)
+
+
+def test_an_imported_submission_has_headroom_for_its_time(client: Client) -> None:
+    create_cup(client)
+    text = imported_body(make_record())
+    padded = imported_body(make_record(), padding=limits.MAX_RECORD_BYTES + 100 - len(text))
+    assert limits.MAX_RECORD_BYTES < len(padded) <= IMPORT_BODY.max_bytes
+    assert client.send("POST", f"/boards/{CUP}/imports", padded)["statusCode"] == 201
+
+
+def test_an_imported_body_over_its_bound_is_413_before_it_is_parsed(client: Client) -> None:
+    create_cup(client)
+    response = client.send("POST", f"/boards/{CUP}/imports", "{" * (IMPORT_BODY.max_bytes + 1))
+    assert response["statusCode"] == 413
+    assert str(IMPORT_BODY.max_bytes) in body(response)["message"]
+
+
+def test_an_imported_record_keeps_the_records_own_bound(client: Client) -> None:
+    create_cup(client)
+    record = record_over_the_record_bound()
+    text = imported_body(record)
+    assert len(text) <= IMPORT_BODY.max_bytes
+    response = client.send("POST", f"/boards/{CUP}/imports", text)
+    assert response["statusCode"] == 413
+    assert f"over the {limits.MAX_RECORD_BYTES} bytes a record may have" in body(response)["message"]
+    assert client.push(record, board=CUP)["statusCode"] == 413  # as a push
+    assert standings(client, CUP) == []
+
+
+@pytest.mark.parametrize("bad_cursor", ["not-a-cursor", "x" * 2000])
+def test_a_bad_export_cursor_is_400(client: Client, bad_cursor: str) -> None:
+    create_cup(client)
+    response = client.send("GET", f"/boards/{CUP}/export", cursor=bad_cursor)
+    assert response["statusCode"] == 400
+    assert body(response)["error"] == "InvalidQuery"
+
+
+def test_organiser_answers_carry_no_cors_headers(client: Client) -> None:
+    origin = {"origin": "https://club.example.org"}
+    created = client.request("POST", "/boards", body=json.dumps(cup_spec()), headers=origin)
+    assert created["statusCode"] == 201
+    exported = client.request("GET", f"/boards/{CUP}/export", headers=origin)
+    assert exported["statusCode"] == 200
+    for response in (created, exported):
+        assert "Access-Control-Allow-Origin" not in response["headers"]
+
+
+@pytest.mark.parametrize(("error", "status"), [
+    (BoardClosed("closed"), 403), (SubmissionLimitReached("all used"), 403),
+    (NotAuthorized("not from here"), 403), (BoardExists("taken"), 409), (BoardLocked("locked"), 409),
+])
+def test_each_refusal_answers_its_status_and_names_itself(app: APIGatewayHttpResolver,
+                                                          error: DomainError, status: int) -> None:
+    class Refusing(LeaderboardService):
+        def create_board(self, spec: Any) -> BoardView:
+            raise error
+
+    store = SqliteStore(":memory:")
+    response = Client(app, Refusing(store)).send("POST", "/boards", cup_spec())
+    store.close()
+    assert response["statusCode"] == status
+    assert body(response) == {"error": type(error).__name__, "message": error.message, "detail": []}
+
+
+def test_a_racers_history_holds_what_the_push_receipt_said(client: Client) -> None:
+    receipt = PushReceipt.model_validate(body(client.push(make_record("Ada"))))
+    [item] = RacerHistory.model_validate(body(client.get("/racers/Ada/submissions"))).history
+    assert item == receipt.submission
+
+
+def test_an_import_onto_a_deleted_boards_id_is_404_until_it_is_restored(client: Client) -> None:
+    create_cup(client)
+    client.send("DELETE", f"/boards/{CUP}")
+    board = Board(board_id=CUP, kind="named", track=TRACK, title="Imported", created_at=T0)
+    response = client.send("PUT", f"/boards/{CUP}/import", board.model_dump(mode="json"))
+    assert response["statusCode"] == 404
+    assert "deleted" in body(response)["message"]
+    client.send("POST", f"/boards/{CUP}/restore")
+    again = client.send("PUT", f"/boards/{CUP}/import", board.model_dump(mode="json"))
+    assert (again["statusCode"], body(again)["title"]) == (200, "Spring Cup")

@@ -12,7 +12,7 @@ from ..routes import build_app, pull_router
 from . import wiring
 
 logger = Logger()
-tracer = Tracer()
+tracer = Tracer(patch_modules=wiring.TRACED_MODULES)
 metrics = Metrics()
 
 app = build_app(pull_router)

@@ -15,7 +15,7 @@ from ..routes import build_app, push_router
 from . import wiring
 
 logger = Logger()
-tracer = Tracer()
+tracer = Tracer(patch_modules=wiring.TRACED_MODULES)
 metrics = Metrics()
 
 SUBMISSION_METRICS = {201: "SubmissionAccepted", 200: "DuplicateSubmission"}

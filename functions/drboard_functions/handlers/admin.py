@@ -1,0 +1,46 @@
+"""The organisers' routes (IAM-authorised in the cloud): POST /boards; PATCH and DELETE
+/boards/{board}; POST /boards/{board}/close and /restore; GET /boards/{board}/export;
+PUT /boards/{board}/import; POST /boards/{board}/imports."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from aws_lambda_powertools import Logger, Metrics, Tracer
+from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, Response
+from aws_lambda_powertools.event_handler.middlewares import NextMiddleware
+from aws_lambda_powertools.logging import correlation_paths
+from aws_lambda_powertools.utilities.typing import LambdaContext
+
+from ..routes import admin_router, build_app
+from . import wiring
+
+logger = Logger()
+tracer = Tracer(patch_modules=wiring.TRACED_MODULES)
+metrics = Metrics()
+
+
+def audit(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
+    """Log who did what to which board: the IAM caller API Gateway authorised, the route and the
+    status. (A refused request is answered by the error handlers and does not reach this log.)"""
+    response = next_middleware(app)
+    event = app.current_event
+    logger.info("OrganiserRequest", extra={
+        "route": f"{event.http_method} {event.path}",
+        "board": app.context.get("_route_args", {}).get("board"),
+        "status": response.status_code,
+        "caller": event.request_context.authorizer.iam.user_arn,
+    })
+    return response
+
+
+app = build_app(admin_router)
+app.use(middlewares=[audit])
+
+
+@logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
+@metrics.log_metrics(capture_cold_start_metric=True)
+@tracer.capture_lambda_handler
+def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
+    app.append_context(service=wiring.service_from_environment())
+    return app.resolve(event, context)
