@@ -610,8 +610,9 @@ def configure(stack_name: str | None, region: str | None, endpoint_url: str | No
 def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: str | None) -> None:
     """Host the board over HTTP with the cloud board's own API, e.g. on an event laptop.
 
-    Racers push to it with `--endpoint http://HOST:PORT`. Ctrl-C stops it; every push that was
-    answered is saved.
+    Racers push to it with `--endpoint http://HOST:PORT`. The organiser commands (`drboard
+    board ...`, `export`, `import`) are answered only on this machine itself. Ctrl-C stops it;
+    every push that was answered is saved.
     """
     from drboard_functions.service import LeaderboardService
 

@@ -1,4 +1,5 @@
-"""GET /, /boards, /boards/{board}, /boards/{board}/racers/{racer}, /boards/{board}/view."""
+"""The public reads: GET /, /boards, /boards/{board}, /boards/{board}/racers/{racer},
+/boards/{board}/view, /racers/{racer} and /racers/{racer}/submissions."""
 
 from __future__ import annotations
 
