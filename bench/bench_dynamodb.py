@@ -15,7 +15,6 @@ Standard library, drboard and its dependencies (boto3), and the repository's tes
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import random
@@ -24,7 +23,6 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
@@ -228,20 +226,10 @@ def main(argv: list[str] | None = None) -> int:
         run(report, server, args)
 
     config = report.config
-    print()
-    print(f"drboard DynamoDB benchmark · DynamoDB Local ({Path(config['dynamodb_local']).parent.name}) · "
-          f"Python {config['python']} · {config['platform']} · {config['cpus']} CPUs"
-          + (" · --quick" if args.quick else ""))
-    print()
-    print(report.table())
-    failed = [f.name for f in report.figures if f.ok is False]
-    print()
-    print(f"{len(failed)} of {sum(f.ok is not None for f in report.figures)} targets missed"
-          if failed else "All targets met.")
-    if args.json:
-        args.json.write_text(json.dumps(
-            {"config": config, "figures": [asdict(f) for f in report.figures]}, indent=2) + "\n")
-        print(f"Figures saved to {args.json}")
+    report.print_summary(
+        f"drboard DynamoDB benchmark · DynamoDB Local ({Path(config['dynamodb_local']).parent.name}) · "
+        f"Python {config['python']} · {config['platform']} · {config['cpus']} CPUs"
+        + (" · --quick" if args.quick else ""), args.json)
     return 0
 
 

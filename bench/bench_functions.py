@@ -24,7 +24,6 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import asdict
 from functools import cache
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -426,13 +425,9 @@ def main(argv: list[str] | None = None) -> int:
     report.add("pull handler / bare Query", ratio, "x", ok=ratio <= HANDLER_OVER_QUERY_TARGET,
                target=f"<= {HANDLER_OVER_QUERY_TARGET} x")
 
-    print(f"drboard functions benchmark · cold starts on Python {runtime_version()} ({python}), "
-          f"warm figures on Python {sys.version.split()[0]} · {os.cpu_count()} CPUs\n")
-    print(report.table())
-    missed = sum(1 for f in report.figures if f.ok is False)
-    print("\n" + ("All targets met." if not missed else f"{missed} target(s) missed"))
-    if args.json:
-        args.json.write_text(json.dumps([asdict(f) for f in report.figures], indent=2))
+    report.print_summary(f"drboard functions benchmark · cold starts on Python {runtime_version()} "
+                         f"({python}), warm figures on Python {sys.version.split()[0]} · "
+                         f"{os.cpu_count()} CPUs", args.json)
     return 0
 
 

@@ -27,7 +27,6 @@ import sys
 import tempfile
 import textwrap
 import time
-from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -491,20 +490,10 @@ def main(argv: list[str] | None = None) -> int:
         with tempfile.TemporaryDirectory(prefix="drboard-bench-") as scratch:
             report = run(args, Path(scratch))
     config = report.config
-    print()
-    print(f"drboard local benchmark · Python {config['python']} · SQLite {config['sqlite']} · "
-          f"{config['platform']} · {config['cpus']} CPUs"
-          + (" · --quick" if args.quick else ""))
-    print()
-    print(report.table())
-    failed = [f.name for f in report.figures if f.ok is False]
-    print()
-    print(f"{len(failed)} of {sum(f.ok is not None for f in report.figures)} targets missed"
-          if failed else "All targets met.")
-    if args.json:
-        args.json.write_text(json.dumps(
-            {"config": config, "figures": [asdict(f) for f in report.figures]}, indent=2) + "\n")
-        print(f"Figures saved to {args.json}")
+    report.print_summary(
+        f"drboard local benchmark · Python {config['python']} · SQLite {config['sqlite']} · "
+        f"{config['platform']} · {config['cpus']} CPUs" + (" · --quick" if args.quick else ""),
+        args.json)
     return 0
 
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import statistics
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
 
@@ -65,6 +67,23 @@ class Report:
         if notes:
             lines += ["", "Notes:", *notes]
         return "\n".join(lines)
+
+
+    def print_summary(self, title: str, json_path: Path | None = None) -> None:
+        """The title, the table and the verdict on standard output; the figures also saved as
+        JSON when ``json_path`` is given."""
+        print()
+        print(title)
+        print()
+        print(self.table())
+        failed = [f.name for f in self.figures if f.ok is False]
+        print()
+        print(f"{len(failed)} of {sum(f.ok is not None for f in self.figures)} targets missed"
+              if failed else "All targets met.")
+        if json_path:
+            json_path.write_text(json.dumps(
+                {"config": self.config, "figures": [asdict(f) for f in self.figures]}, indent=2) + "\n")
+            print(f"Figures saved to {json_path}")
 
 
 def _verdict(ok: bool | None) -> str:
