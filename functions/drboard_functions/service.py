@@ -150,7 +150,7 @@ class LeaderboardService:
             assert best is not None, "a stored submission always has an entry"
             return self._receipt(stored, best, duplicate=True, improved=False)
         _check_open(board, now)
-        submission, entry = _scored(record, board, now)
+        submission, entry = scored_write(record, board, now)
         limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
                                   max_submissions=board.max_submissions)
         try:
@@ -449,7 +449,7 @@ class LeaderboardService:
         board = self._require_board(board_id).board
         record = item.record
         _check_belongs(record, board)
-        submission, entry = _scored(record, board, item.submitted_at)
+        submission, entry = scored_write(record, board, item.submitted_at)
         outcome = self.store.record_submission(submission, record, entry)
         if not outcome.duplicate and self.archive is not None:
             self.archive.put(board_id, record)
@@ -475,8 +475,9 @@ def is_default_board_id(board_id: str) -> bool:
     return False
 
 
-def _scored(record: Record, board: Board, at: datetime) -> tuple[Submission, Entry]:
-    """The submission and the entry a record makes on a board, as of ``at``."""
+def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission, Entry]:
+    """The submission and the candidate entry a record makes on a board, as of ``at``: what a
+    push (or an import) hands the store."""
     score = ranking.score_record(record, board.rules)
     key = racer_key(record.racer)
     score_key = ranking.score_key(score)

@@ -20,11 +20,9 @@ from datetime import UTC, datetime, timedelta
 
 import pytest
 from drboard_assembler.record import Record
-from drboard_functions import ranking
 from drboard_functions.models import (
     Board,
     BoardRules,
-    Design,
     Entry,
     RacerTally,
     Submission,
@@ -32,7 +30,7 @@ from drboard_functions.models import (
     TimingMethod,
     WriteOutcome,
 )
-from drboard_functions.service import racer_key
+from drboard_functions.service import scored_write
 from drboard_functions.stores.base import BoardHasEntries, BoardStore, LimitReached
 
 from tests.recordkit import LapSpec, make_record
@@ -55,27 +53,7 @@ def make_board(board_id: str = TRACK, track: str = TRACK, title: str = "Smile Sp
 
 def write_for(record: Record, board: Board, when: datetime) -> tuple[Submission, Entry]:
     """The submission and candidate entry LeaderboardService.push writes for ``record``."""
-    score = ranking.score_record(record, board.rules)
-    key = racer_key(record.racer)
-    score_key = ranking.score_key(score)
-    space = record.design.action_space
-    submission = Submission(
-        board_id=board.board_id, racer=record.racer, racer_key=key,
-        submission_id=record.submission_id, model_name=record.model_name,
-        submitted_at=when, score=score, score_key=score_key,
-    )
-    entry = Entry(
-        board_id=board.board_id, racer=record.racer, racer_key=key,
-        model_name=record.model_name, submission_id=record.submission_id, achieved_at=when,
-        score=score,
-        design=Design(
-            algorithm=record.design.algorithm, action_space=space.type,
-            actions=len(space.actions) if space.actions else None, max_speed=space.max_speed,
-            max_steering=space.max_steering, sensors=list(record.design.sensors),
-        ),
-        score_key=score_key, rank_key=ranking.rank_key(score_key, when, key),
-    )
-    return submission, entry
+    return scored_write(record, board, when)
 
 
 def submit(store: BoardStore, record: Record, when: datetime, board: Board | None = None,
