@@ -248,8 +248,8 @@ class LeaderboardService:
         if board_id is not None:
             self._require_board(board_id)
         items: list[HistoryItem] = []
-        for board, submissions in self._by_board(self.store.history(key, board_id)).items():
-            best = self.store.get_entry(board, key)
+        for stored, submissions in self._by_board(self.store.history(key, board_id)):
+            best = self.store.get_entry(stored.board.board_id, key)
             items.extend(_history_item(submission, best) for submission in submissions)
         return sorted(items, key=lambda item: (item.submitted_at, item.board_id))
 
@@ -261,9 +261,9 @@ class LeaderboardService:
             self._require_board(board_id)
         now = self.clock()
         statuses = []
-        for board, submissions in self._by_board(self.store.history(key, board_id)).items():
-            stored, entry = self.store.get_board(board), self.store.get_entry(board, key)
-            if stored is None or entry is None:  # pragma: no cover - kept together by the store
+        for stored, submissions in self._by_board(self.store.history(key, board_id)):
+            entry = self.store.get_entry(stored.board.board_id, key)
+            if entry is None:  # pragma: no cover - a submission always has its entry
                 continue
             statuses.append(self._racer_status(stored, entry, submissions[-1], now))
         if not statuses:
@@ -294,20 +294,19 @@ class LeaderboardService:
             next_submission_at=next_at,
         )
 
-    def _by_board(self, submissions: list[Submission]) -> dict[str, list[Submission]]:
-        """The submissions of live boards (not deleted), grouped by board, oldest first."""
+    def _by_board(self, submissions: list[Submission]) -> list[tuple[StoredBoard, list[Submission]]]:
+        """The submissions of live boards (not deleted), with their board, oldest first."""
         grouped: dict[str, list[Submission]] = {}
-        live: dict[str, bool] = {}
+        boards: dict[str, StoredBoard | None] = {}
         for submission in submissions:
-            board = submission.board_id
-            if board not in live:
-                stored = self.store.get_board(board)
-                live[board] = stored is not None and stored.board.deleted_at is None
-            if live[board]:
-                grouped.setdefault(board, []).append(submission)
-        for group in grouped.values():
-            group.sort(key=lambda s: s.submitted_at)
-        return grouped
+            board_id = submission.board_id
+            if board_id not in boards:
+                stored = self.store.get_board(board_id)
+                boards[board_id] = stored if stored and stored.board.deleted_at is None else None
+            if boards[board_id] is not None:
+                grouped.setdefault(board_id, []).append(submission)
+        return [(stored, sorted(grouped[board_id], key=lambda s: s.submitted_at))
+                for board_id, stored in boards.items() if stored is not None]
 
     def _require_board(self, board_id: str) -> StoredBoard:
         return self._live(board_id, self.store.get_board(board_id))
