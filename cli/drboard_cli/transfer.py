@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import IO
 
 from drboard_assembler.errors import field_path
+from drboard_assembler.record import RaceType
 from drboard_functions.models import (
     BOARD_ID_PATTERN,
     Board,
@@ -35,6 +36,7 @@ from drboard_functions.models import (
     ExportedSubmission,
     ExportLine,
     ImportedSubmission,
+    run_mismatches,
 )
 from pydantic import TypeAdapter, ValidationError
 
@@ -210,24 +212,25 @@ def _check_submission(where: str, line: ExportedSubmission, board: Board) -> Non
                             f"exported board {board.board_id!r}")
     if submission.submission_id != record.submission_id:
         raise BadExportFile(f"{where}: submission.submission_id: not the record's submission id")
-    mismatch = _track_mismatch(record.track, record.direction, record.race_type.value, board)
+    mismatch = _track_mismatch(record.track, record.direction, record.race_type, board)
     if mismatch:
         raise BadExportFile(f"{where}: record.{mismatch}")
 
 
-def _track_mismatch(track: str, direction: str | None, race_type: str, board: Board | BoardView) -> str:
-    if track != board.track:
-        return f"track: {track} is not the board's track {board.track}"
-    if (direction == "cw") != (board.direction == "cw"):
-        return "direction: not the board's direction"
-    if race_type != board.race_type.value:
-        return f"race_type: {race_type} is not the board's {board.race_type.value}"
-    return ""
+def _track_mismatch(track: str, direction: str | None, race_type: RaceType,
+                    board: Board | BoardView) -> str:
+    problem = {
+        "track": f"track: {track} is not the board's track {board.track}",
+        "direction": "direction: not the board's direction",
+        "race_type": f"race_type: {race_type.value} is not the board's {board.race_type.value}",
+    }
+    mismatches = run_mismatches(track, direction, race_type, board)
+    return problem[mismatches[0]] if mismatches else ""
 
 
 def _check_same_track(target: BoardView, exported: Board) -> None:
     """An existing board keeps its settings, but its runs must be on the exported board's track."""
-    mismatch = _track_mismatch(exported.track, exported.direction, exported.race_type.value, target)
+    mismatch = _track_mismatch(exported.track, exported.direction, exported.race_type, target)
     if mismatch:
         raise BadExportFile(f"board {target.board_id!r} already exists for other runs "
                             f"({mismatch}): import under another id with --board NEW_ID")

@@ -108,6 +108,21 @@ class Board(Model):
         return bool(self.cooldown_s) or self.max_submissions is not None
 
 
+def run_mismatches(track: str, direction: str | None, race_type: RaceType,
+                   board: "Board | BoardView") -> list[str]:
+    """Which of a run's track, direction and race type keep it off the board (counter-clockwise
+    and unspecified runs share a board): ``track``, ``direction``, ``race_type``, or none."""
+    fields = []
+    if track != board.track:
+        fields.append("track")
+    if (direction == "cw") != (board.direction == "cw"):
+        fields.append("direction")
+    if race_type != board.race_type:
+        fields.append("race_type")
+    return fields
+
+
+
 class SubmissionLimits(Model):
     """What a store checks atomically with a push: the racer's last submission on the board is
     at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``."""

@@ -61,6 +61,7 @@ from .models import (
     RacerView,
     Submission,
     SubmissionLimits,
+    run_mismatches,
 )
 from .stores.base import BoardHasEntries, BoardStore, LimitReached, RecordArchive, StoredBoard
 
@@ -573,13 +574,13 @@ def _decode_export_cursor(text: str) -> tuple[str, str | None]:
 
 
 def _check_belongs(record: Record, board: Board) -> None:
-    problems = []
-    if record.track != board.track:
-        problems.append(f"the run is on {record.track}, the board on {board.track}")
-    if (record.direction == "cw") != (board.direction == "cw"):
-        problems.append("the run and the board differ in direction")
-    if record.race_type != board.race_type:
-        problems.append(f"the run is {record.race_type.value}, the board {board.race_type.value}")
+    problem = {
+        "track": f"the run is on {record.track}, the board on {board.track}",
+        "direction": "the run and the board differ in direction",
+        "race_type": f"the run is {record.race_type.value}, the board {board.race_type.value}",
+    }
+    problems = [problem[field] for field in
+                run_mismatches(record.track, record.direction, record.race_type, board)]
     if problems:
         raise BoardMismatch(f"this run does not belong on {board.board_id!r}: "
                             + "; ".join(problems))
