@@ -75,6 +75,7 @@ from .errors import (
     SubmissionTooLarge,
     TooSoon,
 )
+from .identity import Caller, caller_from_event
 from .models import (
     MAX_PAGE,
     Board,
@@ -198,6 +199,14 @@ def current_service(request: Request) -> LeaderboardService:
 Service = Annotated[LeaderboardService, Depends(current_service)]
 
 
+def current_caller(request: Request) -> Caller | None:
+    """Who the request was authorised as (see :mod:`drboard_functions.identity`), or None."""
+    return caller_from_event(request.resolved_event.raw_event)
+
+
+SignedIn = Annotated[Caller | None, Depends(current_caller)]
+
+
 def _segment(value: str) -> str:
     """A path parameter as the racer typed it: API Gateway's rawPath keeps percent-encoding."""
     return unquote(value)
@@ -298,8 +307,9 @@ def submit(
     board: BoardId,
     record: Annotated[Record, Body(description="The record `drboard assemble` builds.")],
     service: Service,
+    caller: SignedIn,
 ) -> Response[PushReceipt]:
-    receipt = service.push(record, _segment(board))
+    receipt = service.push(record, _segment(board), caller=caller)
     return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
 
 

@@ -33,6 +33,7 @@ from .errors import (
     SubmissionLimitReached,
     TooSoon,
 )
+from .identity import LOCAL_ORGANISER, Caller
 from .models import (
     BOARD_ID_PATTERN,
     MAX_PAGE,
@@ -139,9 +140,11 @@ class LeaderboardService:
 
     # ---- push -----------------------------------------------------------------------------
 
-    def push(self, record: Record, board_id: str | None = None) -> PushReceipt:
+    def push(self, record: Record, board_id: str | None = None,
+             caller: Caller | None = LOCAL_ORGANISER) -> PushReceipt:
         """Store a run on its board. A run already on the board is a duplicate: it changes
-        nothing and is answered whatever the board's window and limits (it never counts)."""
+        nothing and is answered whatever the board's window and limits (it never counts).
+        ``caller`` is who pushes (None: unauthenticated, as `drboard serve` answers a LAN)."""
         now = self.clock()
         board = self._board_for(record, board_id, now).board
         key = racer_key(record.racer)

@@ -296,7 +296,7 @@ def test_a_push_to_a_board_that_does_not_exist_is_404(client: Client) -> None:
 
 def test_a_submission_limit_is_429_with_retry_after(app: APIGatewayHttpResolver) -> None:
     class Limited(LeaderboardService):
-        def push(self, record: Record, board_id: str | None = None) -> PushReceipt:
+        def push(self, record: Record, board_id: str | None = None, caller: Any = None) -> PushReceipt:
             raise TooSoon("one submission a minute", retry_after_s=42)
 
     store = SqliteStore(":memory:")
@@ -479,7 +479,7 @@ def test_field_paths_read_like_the_record() -> None:
 
 def test_a_domain_errors_own_detail_is_passed_on(app: APIGatewayHttpResolver) -> None:
     class Picky(LeaderboardService):
-        def push(self, record: Record, board_id: str | None = None) -> PushReceipt:
+        def push(self, record: Record, board_id: str | None = None, caller: Any = None) -> PushReceipt:
             raise InvalidSubmission("the model is banned", detail=[{"loc": "model_name", "msg": "banned"}])
 
     store = SqliteStore(":memory:")
