@@ -1,8 +1,9 @@
 """A deployed board (or `drboard serve`) over HTTP: the same calls as the in-process board.
 
 Every ``BoardClient`` call maps to one route (see the README's HTTP API). Pushes and every
-organiser call are signed with SigV4 using the caller's AWS credentials when there are any, since
-a deployed board only takes IAM-authorised writes and organiser requests; reads are public.
+organiser call carry the sign-in token saved for the endpoint (:mod:`drboard_cli.tokens`) or, with
+none, are signed with SigV4 using the caller's AWS credentials when there are any; reads are
+public.
 An error answer becomes the domain error the board named in its ``error`` field, so a refusal
 reads the same as on the in-process board; an answer without one (API Gateway's own, e.g. 403
 for an unsigned request) is mapped by its status.
@@ -37,6 +38,8 @@ from drboard_functions.models import (
 )
 from drboard_functions.service import default_board_id
 from pydantic import BaseModel, TypeAdapter, ValidationError
+
+from . import tokens
 
 T = TypeVar("T", bound=BaseModel)
 
@@ -133,7 +136,10 @@ class HttpBoard:
         headers = {"Accept": "application/json"}
         if data is not None:
             headers["Content-Type"] = "application/json"
-        if signed:
+        token = tokens.bearer(self.endpoint) if signed else None
+        if token:
+            headers["Authorization"] = f"Bearer {token}"
+        elif signed:
             headers = _signed(method, url, data or b"", headers)
         request = urllib.request.Request(url, data=data, headers=headers, method=method)
         try:

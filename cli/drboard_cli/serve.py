@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, urlsplit
 
 from drboard_functions.errors import NotAuthorized
+from drboard_functions.identity import LOCAL_ORGANISER
 from drboard_functions.service import LeaderboardService
 from rich.console import Console
 
@@ -132,6 +133,8 @@ class BoardServer(ThreadingHTTPServer):
             return _refused(NotAuthorized(
                 "organiser requests are answered only on the computer running `drboard serve`; "
                 f"this one came from {http['sourceIp']}"))
+        if local:  # the organiser at this computer; serve builds every event, so none can claim it
+            event["requestContext"]["authorizer"] = {"lambda": LOCAL_ORGANISER.model_dump()}
         app = self.app if local else self.public_app
         with self.lock:
             app.append_context(service=self.service)

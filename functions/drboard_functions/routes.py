@@ -207,6 +207,18 @@ def current_caller(request: Request) -> Caller | None:
 SignedIn = Annotated[Caller | None, Depends(current_caller)]
 
 
+def current_organiser(request: Request) -> Caller:
+    """The caller, who must be an organiser (the ``organisers`` group, IAM, or the computer
+    running `drboard serve`); anyone else is refused with 403 before the route runs."""
+    caller = current_caller(request)
+    if caller is None or not caller.organiser:
+        raise NotAuthorized("only the board's organisers may do this")
+    return caller
+
+
+Organiser = Annotated[Caller, Depends(current_organiser)]
+
+
 def _segment(value: str) -> str:
     """A path parameter as the racer typed it: API Gateway's rawPath keeps percent-encoding."""
     return unquote(value)
@@ -451,7 +463,7 @@ _DEFAULT_BOARD = ("The board is a track's default board, which keeps the default
 )
 @takes(BOARD_BODY)
 def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
-                 service: Service) -> Response[BoardView]:
+                 service: Service, organiser: Organiser) -> Response[BoardView]:
     return _json(HTTPStatus.CREATED, service.create_board(spec))
 
 
@@ -472,7 +484,7 @@ def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
 @takes(CHANGES_BODY)
 def update_board(board: BoardId,
                  changes: Annotated[BoardChanges, Body(description="The fields to change.")],
-                 service: Service) -> BoardView:
+                 service: Service, organiser: Organiser) -> BoardView:
     return service.update_board(_segment(board), changes)
 
 
@@ -485,7 +497,7 @@ def update_board(board: BoardId,
                                errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
     **_ADMIN,
 )
-def close_board(board: BoardId, service: Service) -> BoardView:
+def close_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.close_board(_segment(board))
 
 
@@ -498,7 +510,7 @@ def close_board(board: BoardId, service: Service) -> BoardView:
                                errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
     **_ADMIN,
 )
-def delete_board(board: BoardId, service: Service) -> BoardView:
+def delete_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.delete_board(_segment(board))
 
 
@@ -510,7 +522,7 @@ def delete_board(board: BoardId, service: Service) -> BoardView:
                                errors={404: "No such board."}),
     **_ADMIN,
 )
-def restore_board(board: BoardId, service: Service) -> BoardView:
+def restore_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.restore_board(_segment(board))
 
 
@@ -524,7 +536,7 @@ def restore_board(board: BoardId, service: Service) -> BoardView:
                                errors={400: "A bad cursor or board id.", 404: "No such board."}),
     **_ADMIN,
 )
-def export_board(board: BoardId, service: Service, cursor: Cursor = None) -> ExportPage:
+def export_board(board: BoardId, service: Service, organiser: Organiser, cursor: Cursor = None) -> ExportPage:
     return service.export_page(_segment(board), cursor or None)
 
 
@@ -547,7 +559,7 @@ def export_board(board: BoardId, service: Service, cursor: Cursor = None) -> Exp
 @takes(BOARD_BODY)
 def import_board(board: BoardId,
                  exported: Annotated[Board, Body(description="The `board` of an export's first line.")],
-                 service: Service) -> Response[BoardView]:
+                 service: Service, organiser: Organiser) -> Response[BoardView]:
     board_id = _segment(board)
     if exported.board_id != board_id:
         raise InvalidQuery(f"the body is board {exported.board_id!r} but the path names {board_id!r}",
@@ -582,7 +594,7 @@ def import_submission(board: BoardId,
                       item: Annotated[ImportedSubmission, Body(description="A submission line of "
                                                                            "an export: its record "
                                                                            "and `submitted_at`.")],
-                      service: Service) -> Response[ImportReceipt]:
+                      service: Service, organiser: Organiser) -> Response[ImportReceipt]:
     _check_record_size(item.record)
     receipt = service.import_submission(_segment(board), item)
     return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)

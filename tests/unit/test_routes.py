@@ -86,6 +86,13 @@ def app() -> APIGatewayHttpResolver:
     return build_app(push_router, pull_router, admin_router)
 
 
+#: What API Gateway's IAM authorizer adds to a signed request (an organiser's script).
+IAM_ORGANISER: dict[str, Any] = {"iam": {"userArn": "arn:aws:sts::123456789012:assumed-role/org/ada"}}
+#: What its JWT authorizer adds for a signed-in racer who is not an organiser.
+SIGNED_IN_RACER: dict[str, Any] = {"jwt": {"claims": {"sub": "7d3c", "token_use": "access",
+                                                     "username": "speedy"}, "scopes": None}}
+
+
 class Client:
     """Sends v2 events through the resolver, with the service in its context."""
 
@@ -95,8 +102,9 @@ class Client:
 
     def request(self, method: str, path: str, *, body: str | None = None,
                 query: dict[str, str] | None = None,
-                headers: dict[str, str] | None = None) -> dict[str, Any]:
-        event = {
+                headers: dict[str, str] | None = None,
+                authorizer: dict[str, Any] | None = IAM_ORGANISER) -> dict[str, Any]:
+        event: dict[str, Any] = {
             "version": "2.0",
             "routeKey": "$default",
             "rawPath": path,
@@ -108,7 +116,7 @@ class Client:
                 "http": {"method": method, "path": path, "protocol": "HTTP/1.1",
                          "sourceIp": "127.0.0.1", "userAgent": "pytest"},
                 "routeKey": "$default", "stage": "$default", "timeEpoch": 0,
-            },
+            } | ({"authorizer": authorizer} if authorizer else {}),
             "body": body,
             "isBase64Encoded": False,
         }
@@ -997,3 +1005,11 @@ def test_an_import_onto_a_deleted_boards_id_is_404_until_it_is_restored(client: 
     client.send("POST", f"/boards/{CUP}/restore")
     again = client.send("PUT", f"/boards/{CUP}/import", board.model_dump(mode="json"))
     assert (again["statusCode"], body(again)["title"]) == (200, "Spring Cup")
+
+
+@pytest.mark.parametrize("authorizer", [None, SIGNED_IN_RACER], ids=["unsigned", "racer"])
+def test_only_organisers_manage_boards(client: Client, authorizer: dict[str, Any] | None) -> None:
+    response = client.request("POST", "/boards", body=json.dumps(cup_spec()), authorizer=authorizer)
+    assert response["statusCode"] == 403
+    assert json.loads(response["body"])["error"] == "NotAuthorized"
+    assert client.get("/boards/spring-cup")["statusCode"] == 404
