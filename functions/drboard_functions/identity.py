@@ -13,7 +13,7 @@ The authorizer context a request carries is one of:
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict
 
@@ -60,3 +60,17 @@ def _from_jwt_claims(claims: dict[str, Any]) -> Caller | None:
         groups = groups.strip("[]").replace(",", " ").split()
     return Caller(principal=f"cognito:{claims['sub']}", name=str(claims.get("username") or ""),
                   organiser=ORGANISERS_GROUP in groups)
+
+
+class SignIn(BaseModel):
+    """How racers sign in to this board: what ``GET /.well-known/drboard.json`` tells
+    `drboard login --endpoint URL`. The edges put one in the resolver's context
+    (``app.append_context(sign_in=...)``): the functions from the stack's settings,
+    `drboard serve` from its own options."""
+
+    kind: Literal["cognito", "join-code", "none"] = "none"
+    region: str | None = None
+    user_pool_id: str | None = None
+    client_id: str | None = None
+    domain: str | None = None  # the user pool's hosted sign-in domain, e.g. https://x.auth.eu-west-1.amazoncognito.com
+    scopes: list[str] = []
