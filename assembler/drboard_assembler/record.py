@@ -16,6 +16,7 @@ from enum import StrEnum
 from typing import Annotated, Any, Literal, NamedTuple, Self
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
@@ -24,6 +25,7 @@ from pydantic import (
 )
 
 from . import limits
+from .aliases import alias_problem
 from .catalog import default_catalog
 
 SCHEMA_VERSION: Literal[1] = 1
@@ -37,6 +39,17 @@ Name = Annotated[
         pattern=r"^[^\x00-\x1f\x7f]+$",
     ),
 ]
+
+
+def _no_lookalike(alias: str) -> str:
+    problem = alias_problem(alias)
+    if problem:
+        raise ValueError(f"the alias {alias!r} {problem}")
+    return alias
+
+
+#: A racer's alias: a Name that cannot pass for another racer's in print.
+Alias = Annotated[Name, AfterValidator(_no_lookalike)]
 Text = Annotated[str, StringConstraints(max_length=limits.MAX_TEXT_CHARS)]
 Sha256 = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
 Count = Annotated[int, Field(ge=0, le=1_000_000)]
@@ -236,7 +249,7 @@ class Record(Strict):
     track: Annotated[str, StringConstraints(min_length=1, max_length=limits.MAX_NAME_CHARS)]
     custom_track: bool = False
     direction: Literal["cw", "ccw"] | None = None
-    racer: Name
+    racer: Alias
     model_name: Name
     race_type: RaceType = RaceType.TIME_TRIAL
     source_layout: SourceLayout

@@ -63,7 +63,23 @@ class BoardLocked(DomainError):
 
 
 class NotAuthorized(DomainError):
-    """The board refused the caller (HTTP 401/403): unsigned, or not allowed."""
+    """The board refused the caller (HTTP 403): not allowed to do this."""
+
+
+class NotSignedIn(NotAuthorized):
+    """The request carries no sign-in the board accepts (HTTP 401)."""
+
+
+class AliasTaken(NotAuthorized):
+    """The alias belongs to another racer, or the caller pushes as another alias (HTTP 403)."""
+
+
+class Banned(NotAuthorized):
+    """An organiser banned the racer from the board (HTTP 403)."""
+
+
+class CopiedRun(DomainError):
+    """The run's evaluation is already on the board under another racer (HTTP 409)."""
 
 
 class BoardUnreachable(DomainError):

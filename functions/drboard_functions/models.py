@@ -14,6 +14,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstra
 MAX_PAGE = 500
 MAX_COOLDOWN_S = 7 * 24 * 3600
 MAX_SUBMISSIONS = 10_000
+MAX_BANNED = 1000
 MAX_BOARD_ID_CHARS = 80  # a custom track's name (64) and its direction and race suffixes
 BOARD_ID_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
 
@@ -89,6 +90,8 @@ class Board(Model):
     max_submissions: SubmissionCap | None = None
     created_at: datetime
     deleted_at: datetime | None = None
+    #: Racer keys an organiser banned: their pushes are refused, their entry kept off the board.
+    banned: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
 
     @model_validator(mode="after")
     def _window_in_order(self) -> Self:
@@ -187,6 +190,61 @@ class Submission(Model):
     submitted_at: datetime
     score: Score
     score_key: str
+
+
+class AliasClaim(Model):
+    """An alias and the sign-in that holds it: one alias per sign-in, one sign-in per alias."""
+
+    racer_key: str
+    alias: str
+    principal: str
+    claimed_at: datetime
+
+
+AuditAction = Literal["push", "create", "update", "close", "delete", "restore", "import",
+                      "remove-entry", "ban", "unban"]
+
+
+class AuditEvent(Model):
+    """One line of a board's audit trail: who did what, and when. Never changed or removed."""
+
+    board_id: str
+    at: datetime
+    event_id: str  # unique, and in time order within a board
+    action: AuditAction
+    actor: str  # the caller's principal (``local``, ``cognito:<sub>``, ``iam:<arn>``, ``join:<id>``)
+    actor_name: str = ""
+    racer: str | None = None
+    submission_id: str | None = None
+    detail: str = ""
+
+
+class AuditPage(Model):
+    board_id: str
+    events: list[AuditEvent]
+    next_cursor: str | None = None
+
+
+class Me(Model):
+    """Who the board takes the caller for, and the alias they push as."""
+
+    principal: str
+    name: str
+    organiser: bool
+    alias: str | None
+
+
+class Moderation(Model):
+    """What an organiser's remove-entry, ban or unban left."""
+
+    board: "BoardView"
+    racer: str
+    banned: bool
+    entry_removed: bool
+
+
+class AliasRequest(Model):
+    alias: Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=64)]
 
 
 class WriteOutcome(Model):

@@ -61,15 +61,19 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from . import web
 from .errors import (
+    AliasTaken,
+    Banned,
     BoardClosed,
     BoardExists,
     BoardLocked,
     BoardMismatch,
     BoardNotFound,
+    CopiedRun,
     DomainError,
     InvalidQuery,
     InvalidSubmission,
     NotAuthorized,
+    NotSignedIn,
     RacerNotFound,
     SubmissionLimitReached,
     SubmissionTooLarge,
@@ -78,6 +82,8 @@ from .errors import (
 from .identity import Caller, caller_from_event
 from .models import (
     MAX_PAGE,
+    AliasRequest,
+    AuditPage,
     Board,
     BoardChanges,
     BoardPage,
@@ -86,6 +92,8 @@ from .models import (
     ExportPage,
     ImportedSubmission,
     ImportReceipt,
+    Me,
+    Moderation,
     PushReceipt,
     RacerHistory,
     RacerSummary,
@@ -246,6 +254,7 @@ IMPORT_BODY = RequestBody("submission", limits.MAX_RECORD_BYTES + IMPORT_HEADROO
                           InvalidSubmission)
 BOARD_BODY = RequestBody("board", MAX_BOARD_BODY_BYTES, InvalidQuery)
 CHANGES_BODY = RequestBody("changes", MAX_BOARD_BODY_BYTES, InvalidQuery)
+ALIAS_BODY = RequestBody("alias", limits.KIB, InvalidQuery)
 
 _BODIES: dict[Callable[..., Any], RequestBody] = {}
 F = TypeVar("F", bound=Callable[..., Any])
@@ -302,9 +311,14 @@ def _json(status: int, body: BaseModel) -> Response[Any]:
         201: _json_response("The submission was stored.", PushReceipt),
         200: _json_response("The same run was already submitted; nothing changed.", PushReceipt),
         400: _error_response(_BAD_PATH),
+        401: _error_response("No sign-in the board accepts (`NotSignedIn`)."),
         403: _error_response("The board is not open (`BoardClosed`: it opens later or has "
-                             "closed), or the racer has made every submission it allows "
-                             "(`SubmissionLimitReached`). " + _UNSIGNED),
+                             "closed), the racer has made every submission it allows "
+                             "(`SubmissionLimitReached`), the alias is another racer's or the "
+                             "caller pushes as another alias (`AliasTaken`), or the racer is "
+                             "banned from the board (`Banned`). " + _UNSIGNED),
+        409: _error_response("The run's evaluation is already on the board under another "
+                             "racer (`CopiedRun`)."),
         404: _error_response("No such board, and the run's own board is another one."),
         413: _error_response(f"The body is over {limits.MAX_RECORD_BYTES} bytes."),
         415: _error_response("The body is not JSON."),
@@ -323,6 +337,48 @@ def submit(
 ) -> Response[PushReceipt]:
     receipt = service.push(record, _segment(board), caller=caller)
     return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
+
+
+# ---- the signed-in caller -------------------------------------------------------------------------
+
+
+@push_router.get(
+    "/me",
+    cors=False,
+    summary="Who the board takes you for",
+    description="The caller's sign-in and the alias it holds (null before the first push or "
+                "`PUT /me/alias`).",
+    tags=["racers"],
+    security=[{SIGV4: []}],
+    responses={200: _json_response("The caller.", Me),
+               401: _error_response("No sign-in the board accepts (`NotSignedIn`).")},
+)
+def get_me(service: Service, caller: SignedIn) -> Me:
+    return service.me(caller)
+
+
+@push_router.put(
+    "/me/alias",
+    cors=False,
+    summary="Claim your racer alias",
+    description="Binds the alias to the caller's sign-in, once: aliases are compared after "
+                "Unicode NFKC and case folding, and one holding invisible characters or mixing "
+                "lookalike scripts is refused. A racer's first push claims its alias too.",
+    tags=["racers"],
+    security=[{SIGV4: []}],
+    responses={200: _json_response("The caller, with the alias.", Me),
+               400: _error_response("The alias is not one a racer may take."),
+               401: _error_response("No sign-in the board accepts (`NotSignedIn`)."),
+               403: _error_response("The alias is another racer's, or the caller holds another "
+                                    "(`AliasTaken`)."),
+               413: _error_response(f"The body is over {ALIAS_BODY.max_bytes} bytes."),
+               415: _error_response("The body is not JSON."),
+               422: _error_response("The body is not `{\"alias\": ...}`.")},
+)
+@takes(ALIAS_BODY)
+def put_my_alias(request: Annotated[AliasRequest, Body(description="The alias to claim.")],
+                 service: Service, caller: SignedIn) -> Me:
+    return service.claim_alias(caller, request.alias)
 
 
 # ---- pull ---------------------------------------------------------------------------------------
@@ -464,7 +520,7 @@ _DEFAULT_BOARD = ("The board is a track's default board, which keeps the default
 @takes(BOARD_BODY)
 def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
                  service: Service, organiser: Organiser) -> Response[BoardView]:
-    return _json(HTTPStatus.CREATED, service.create_board(spec))
+    return _json(HTTPStatus.CREATED, service.create_board(spec, caller=organiser))
 
 
 @admin_router.patch(
@@ -485,7 +541,7 @@ def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
 def update_board(board: BoardId,
                  changes: Annotated[BoardChanges, Body(description="The fields to change.")],
                  service: Service, organiser: Organiser) -> BoardView:
-    return service.update_board(_segment(board), changes)
+    return service.update_board(_segment(board), changes, caller=organiser)
 
 
 @admin_router.post(
@@ -498,7 +554,7 @@ def update_board(board: BoardId,
     **_ADMIN,
 )
 def close_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
-    return service.close_board(_segment(board))
+    return service.close_board(_segment(board), caller=organiser)
 
 
 @admin_router.delete(
@@ -511,7 +567,7 @@ def close_board(board: BoardId, service: Service, organiser: Organiser) -> Board
     **_ADMIN,
 )
 def delete_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
-    return service.delete_board(_segment(board))
+    return service.delete_board(_segment(board), caller=organiser)
 
 
 @admin_router.post(
@@ -523,7 +579,7 @@ def delete_board(board: BoardId, service: Service, organiser: Organiser) -> Boar
     **_ADMIN,
 )
 def restore_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
-    return service.restore_board(_segment(board))
+    return service.restore_board(_segment(board), caller=organiser)
 
 
 @admin_router.get(
@@ -565,7 +621,7 @@ def import_board(board: BoardId,
         raise InvalidQuery(f"the body is board {exported.board_id!r} but the path names {board_id!r}",
                            detail=[{"loc": "board_id", "msg": f"should be {board_id!r}",
                                     "type": "value_error"}])
-    view, created = service.import_board(exported)
+    view, created = service.import_board(exported, caller=organiser)
     return _json(HTTPStatus.CREATED if created else HTTPStatus.OK, view)
 
 
@@ -596,8 +652,62 @@ def import_submission(board: BoardId,
                                                                            "and `submitted_at`.")],
                       service: Service, organiser: Organiser) -> Response[ImportReceipt]:
     _check_record_size(item.record)
-    receipt = service.import_submission(_segment(board), item)
+    receipt = service.import_submission(_segment(board), item, caller=organiser)
     return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
+
+
+@admin_router.delete(
+    "/boards/<board>/racers/<racer>",
+    summary="Take a racer's entry off a board",
+    description="The racer's submissions stay (and show in the audit trail); the standings are "
+                "recomputed without them. Their next push makes a new entry.",
+    responses=_admin_responses(_json_response("What the board now shows of the racer.", Moderation),
+                               errors={404: "No such board, or the racer never pushed to it."}),
+    **_ADMIN,
+)
+def remove_entry(board: BoardId, racer: RacerAlias, service: Service,
+                 organiser: Organiser) -> Moderation:
+    return service.remove_entry(_segment(board), _segment(racer), caller=organiser)
+
+
+@admin_router.put(
+    "/boards/<board>/bans/<racer>",
+    summary="Ban a racer from a board",
+    description="Their pushes are refused (`Banned`) and their entry comes off the board; their "
+                "submissions stay, and `DELETE` on the same path puts their best back.",
+    responses=_admin_responses(_json_response("The racer is banned.", Moderation),
+                               errors={404: _NO_BOARD}),
+    **_ADMIN,
+)
+def ban_racer(board: BoardId, racer: RacerAlias, service: Service, organiser: Organiser) -> Moderation:
+    return service.ban(_segment(board), _segment(racer), caller=organiser)
+
+
+@admin_router.delete(
+    "/boards/<board>/bans/<racer>",
+    summary="Lift a racer's ban",
+    description="The racer may push again, and their best submission is back on the board.",
+    responses=_admin_responses(_json_response("The racer is no longer banned.", Moderation),
+                               errors={404: _NO_BOARD}),
+    **_ADMIN,
+)
+def unban_racer(board: BoardId, racer: RacerAlias, service: Service,
+                organiser: Organiser) -> Moderation:
+    return service.unban(_segment(board), _segment(racer), caller=organiser)
+
+
+@admin_router.get(
+    "/boards/<board>/audit",
+    summary="A board's audit trail",
+    description="Every accepted push and every organiser action on the board, oldest first: "
+                "who (`actor`), when, what. Pass `next_cursor` as `cursor` for the next page.",
+    responses=_admin_responses(_json_response("One page of the audit trail.", AuditPage),
+                               errors={400: "A bad limit or cursor.", 404: "No such board."}),
+    **_ADMIN,
+)
+def get_audit(board: BoardId, service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
+              cursor: Cursor = None) -> AuditPage:
+    return service.audit(_segment(board), cursor or None, limit)
 
 
 # ---- errors: the one place where domain errors become HTTP statuses ---------------------------
@@ -613,7 +723,11 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (TooSoon, HTTPStatus.TOO_MANY_REQUESTS),
     (BoardClosed, HTTPStatus.FORBIDDEN),
     (SubmissionLimitReached, HTTPStatus.FORBIDDEN),
+    (NotSignedIn, HTTPStatus.UNAUTHORIZED),
+    (AliasTaken, HTTPStatus.FORBIDDEN),
+    (Banned, HTTPStatus.FORBIDDEN),
     (NotAuthorized, HTTPStatus.FORBIDDEN),
+    (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
 )

@@ -8,27 +8,35 @@ from __future__ import annotations
 
 import base64
 import binascii
+import hashlib
 import json
 import math
 import re
+import secrets
 from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 from typing import Any, Literal
 
+from drboard_assembler.aliases import alias_key
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
 from drboard_assembler.errors import field_path
-from drboard_assembler.record import RaceType, Record
-from pydantic import ValidationError
+from drboard_assembler.record import Alias, EvaluationRun, RaceType, Record
+from pydantic import TypeAdapter, ValidationError
 
 from . import ranking
 from .errors import (
+    AliasTaken,
+    Banned,
     BoardClosed,
     BoardExists,
     BoardLocked,
     BoardMismatch,
     BoardNotFound,
+    CopiedRun,
     DomainError,
     InvalidQuery,
+    NotAuthorized,
+    NotSignedIn,
     RacerNotFound,
     SubmissionLimitReached,
     TooSoon,
@@ -37,6 +45,10 @@ from .identity import LOCAL_ORGANISER, Caller
 from .models import (
     BOARD_ID_PATTERN,
     MAX_PAGE,
+    AliasClaim,
+    AuditAction,
+    AuditEvent,
+    AuditPage,
     Board,
     BoardChanges,
     BoardPage,
@@ -55,6 +67,8 @@ from .models import (
     HistoryItem,
     ImportedSubmission,
     ImportReceipt,
+    Me,
+    Moderation,
     PushReceipt,
     RacerStatus,
     RacerSummary,
@@ -64,7 +78,15 @@ from .models import (
     SubmissionLimits,
     run_mismatches,
 )
-from .stores.base import BoardHasEntries, BoardStore, LimitReached, RecordArchive, StoredBoard
+from .stores.base import (
+    AliasConflict,
+    BoardHasEntries,
+    BoardStore,
+    FingerprintTaken,
+    LimitReached,
+    RecordArchive,
+    StoredBoard,
+)
 
 Clock = Callable[[], datetime]
 MAX_CURSOR_CHARS = 1024
@@ -92,8 +114,8 @@ def utc_now() -> datetime:
 
 
 def racer_key(racer: str) -> str:
-    """Racer aliases are matched without regard to case or surrounding space."""
-    return " ".join(racer.split()).casefold()
+    """Racer aliases are matched after Unicode NFKC and case folding, white space collapsed."""
+    return alias_key(racer)
 
 
 def default_board_id(track: str, direction: str | None, race_type: RaceType) -> str:
@@ -144,28 +166,89 @@ class LeaderboardService:
              caller: Caller | None = LOCAL_ORGANISER) -> PushReceipt:
         """Store a run on its board. A run already on the board is a duplicate: it changes
         nothing and is answered whatever the board's window and limits (it never counts).
-        ``caller`` is who pushes (None: unauthenticated, as `drboard serve` answers a LAN)."""
+        ``caller`` is who pushes: a racer may push only as the alias their sign-in holds (their
+        first push claims it); organisers push as anyone; None (unsigned) is refused."""
         now = self.clock()
+        self._check_pusher(caller, record.racer, now)
         board = self._board_for(record, board_id, now).board
         key = racer_key(record.racer)
+        if key in board.banned:
+            raise Banned(f"{record.racer!r} is banned from {board.board_id!r} by its organisers")
         stored = self.store.get_submission(board.board_id, key, record.submission_id)
         if stored is not None:
-            best = self.store.get_entry(board.board_id, key)
-            assert best is not None, "a stored submission always has an entry"
-            return self._receipt(stored, best, duplicate=True, improved=False)
+            return self._duplicate_receipt(stored, record.racer)
         _check_open(board, now)
         submission, entry = scored_write(record, board, now)
         limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
                                   max_submissions=board.max_submissions)
+        audit = self._event(board.board_id, "push", caller, now, racer=record.racer,
+                            submission_id=record.submission_id, detail=record.model_name)
         try:
-            outcome = self.store.record_submission(submission, record, entry, limits)
+            outcome = self.store.record_submission(submission, record, entry, limits,
+                                                   fingerprints=evaluation_fingerprints(record),
+                                                   audit=audit)
         except LimitReached as refused:
             raise _limit_error(board, record.racer, refused.tally, now) from None
+        except FingerprintTaken as copy:
+            raise CopiedRun(f"this run's evaluation is already on {board.board_id!r} under "
+                            f"another racer ({copy.racer_key}): a copied run is refused") from None
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
-            submission = self.store.get_submission(board.board_id, key, record.submission_id) or submission
-        elif self.archive is not None:
+            stored = self.store.get_submission(board.board_id, key, record.submission_id)
+            return self._duplicate_receipt(stored or submission, record.racer)
+        if self.archive is not None:
             self.archive.put(board.board_id, record)
         return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
+
+    def _duplicate_receipt(self, stored: Submission, racer: str) -> PushReceipt:
+        best = self.store.get_entry(stored.board_id, stored.racer_key)
+        if best is None:
+            raise NotAuthorized(f"{racer!r} was taken off {stored.board_id!r} by its organisers; "
+                                "this run stays off it")
+        return self._receipt(stored, best, duplicate=True, improved=False)
+
+    def _check_pusher(self, caller: Caller | None, racer: str, now: datetime) -> None:
+        if caller is None:
+            raise NotSignedIn("sign in to push: `drboard login` for a deployed board, "
+                              "`drboard join CODE` for a `drboard serve` board")
+        if caller.organiser:
+            return
+        claim = self.store.alias_of(caller.principal) or self._claim(caller, racer, now)
+        if claim.racer_key != racer_key(racer):
+            raise AliasTaken(f"you push as {claim.alias!r}: this run is {racer!r}'s "
+                             "(give `--racer` your own alias)")
+
+    def _claim(self, caller: Caller, alias: str, now: datetime) -> AliasClaim:
+        claim = AliasClaim(racer_key=racer_key(alias), alias=alias, principal=caller.principal,
+                           claimed_at=now)
+        try:
+            return self.store.claim_alias(claim)
+        except AliasConflict as conflict:
+            if conflict.holder.principal == caller.principal:
+                raise AliasTaken(f"you push as {conflict.holder.alias!r}, not {alias!r}: "
+                                 "an alias is claimed once") from None
+            raise AliasTaken(f"the alias {alias!r} belongs to another racer") from None
+
+    # ---- who is calling -------------------------------------------------------------------
+
+    def me(self, caller: Caller | None) -> Me:
+        if caller is None:
+            raise NotSignedIn("not signed in: `drboard login` or `drboard join CODE`")
+        claim = self.store.alias_of(caller.principal)
+        return Me(principal=caller.principal, name=caller.name, organiser=caller.organiser,
+                  alias=claim.alias if claim else None)
+
+    def claim_alias(self, caller: Caller | None, alias: str) -> Me:
+        """Claim the alias the caller will push as (once: an alias is not renamed)."""
+        if caller is None:
+            raise NotSignedIn("sign in to claim an alias: `drboard login` or `drboard join CODE`")
+        try:
+            alias = _ALIAS.validate_python(alias)
+        except ValidationError as error:
+            message = error.errors()[0]["msg"].removeprefix("Value error, ")
+            raise InvalidQuery(message, detail=[{"loc": "alias", "msg": message,
+                                                 "type": "value_error"}]) from None
+        self._claim(caller, alias, self.clock())
+        return self.me(caller)
 
     def _receipt(self, submission: Submission, best: Entry, duplicate: bool,
                  improved: bool) -> PushReceipt:
@@ -328,7 +411,7 @@ class LeaderboardService:
 
     # ---- managing boards (organisers) -----------------------------------------------------
 
-    def create_board(self, spec: BoardSpec) -> BoardView:
+    def create_board(self, spec: BoardSpec, caller: Caller = LOCAL_ORGANISER) -> BoardView:
         now = self.clock()
         track, direction = _spec_track(spec)
         if is_default_board_id(spec.board_id) or spec.board_id == default_board_id(
@@ -347,9 +430,11 @@ class LeaderboardService:
         stored = self.store.create_board(board)
         if stored.board != board:
             raise BoardExists(f"there is already a board {board.board_id!r}")
+        self._audit(board.board_id, "create", caller, detail=board.title)
         return _board_view(stored, now)
 
-    def update_board(self, board_id: str, changes: BoardChanges) -> BoardView:
+    def update_board(self, board_id: str, changes: BoardChanges,
+                     caller: Caller = LOCAL_ORGANISER) -> BoardView:
         stored = self._named(board_id)
         board = stored.board
         given = changes.model_fields_set
@@ -367,28 +452,116 @@ class LeaderboardService:
         updated = _valid_board(**(board.model_dump() | updates | {"rules": rules.model_dump()}))
         if rescores and stored.participants:
             raise BoardLocked(_LOCKED.format(board_id))
-        return self._save(updated, only_if_empty=rescores)
+        view = self._save(updated, only_if_empty=rescores)
+        self._audit(board_id, "update", caller,
+                    detail=changes.model_dump_json(exclude_unset=True))
+        return view
 
-    def close_board(self, board_id: str) -> BoardView:
+    def close_board(self, board_id: str, caller: Caller = LOCAL_ORGANISER) -> BoardView:
         """Close the board now; an upcoming board closes without ever opening."""
         board = self._named(board_id).board
         now = self.clock()
         if board.status(now) is BoardStatus.CLOSED:
             return _board_view(self._named(board_id), now)
         opens_at = board.opens_at if board.opens_at and board.opens_at < now else None
-        return self._save(board.model_copy(update={"closes_at": now, "opens_at": opens_at}))
+        view = self._save(board.model_copy(update={"closes_at": now, "opens_at": opens_at}))
+        self._audit(board_id, "close", caller)
+        return view
 
-    def delete_board(self, board_id: str) -> BoardView:
+    def delete_board(self, board_id: str, caller: Caller = LOCAL_ORGANISER) -> BoardView:
         """Delete a named board softly: it disappears from lists, pushes and pulls, and
         ``restore_board`` brings it back whole."""
         board = self._named(board_id).board
-        return self._save(board.model_copy(update={"deleted_at": self.clock()}))
+        view = self._save(board.model_copy(update={"deleted_at": self.clock()}))
+        self._audit(board_id, "delete", caller)
+        return view
 
-    def restore_board(self, board_id: str) -> BoardView:
+    def restore_board(self, board_id: str, caller: Caller = LOCAL_ORGANISER) -> BoardView:
         stored = self.store.get_board(board_id)
         if stored is None:
             raise BoardNotFound(f"no board {board_id!r}")
-        return self._save(stored.board.model_copy(update={"deleted_at": None}))
+        view = self._save(stored.board.model_copy(update={"deleted_at": None}))
+        self._audit(board_id, "restore", caller)
+        return view
+
+    # ---- moderation and audit (organisers) ------------------------------------------------
+
+    def remove_entry(self, board_id: str, racer: str, caller: Caller = LOCAL_ORGANISER) -> Moderation:
+        """Take the racer's entry off the board; their submissions stay, and their next push
+        makes a new entry."""
+        self._require_board(board_id)
+        removed = self.store.remove_entry(board_id, self._racer_on(board_id, racer))
+        self._audit(board_id, "remove-entry", caller, racer=racer,
+                    submission_id=removed.submission_id if removed else None)
+        return self._moderation(board_id, racer, removed=removed is not None)
+
+    def ban(self, board_id: str, racer: str, caller: Caller = LOCAL_ORGANISER) -> Moderation:
+        """Refuse the racer's pushes to the board and take their entry off it (their
+        submissions stay: `unban` puts their best back)."""
+        board = self._require_board(board_id).board
+        key = racer_key(racer)
+        if key not in board.banned:
+            self._save(board.model_copy(update={"banned": [*board.banned, key]}))
+        removed = self.store.remove_entry(board_id, key)
+        self._audit(board_id, "ban", caller, racer=racer)
+        return self._moderation(board_id, racer, removed=removed is not None)
+
+    def unban(self, board_id: str, racer: str, caller: Caller = LOCAL_ORGANISER) -> Moderation:
+        """Take the racer off the board's ban list and put their best submission back."""
+        board = self._require_board(board_id).board
+        key = racer_key(racer)
+        if key in board.banned:
+            board = board.model_copy(update={"banned": [k for k in board.banned if k != key]})
+            self._save(board)
+        best = self._best_entry(board, key)
+        if best is not None:
+            self.store.restore_entry(best)
+        self._audit(board_id, "unban", caller, racer=racer)
+        return self._moderation(board_id, racer, removed=False)
+
+    def audit(self, board_id: str, cursor: str | None = None, limit: int = 100) -> AuditPage:
+        """The board's audit trail, oldest first, ``limit`` events at a time."""
+        if not 1 <= limit <= MAX_PAGE:
+            raise InvalidQuery(f"limit must be between 1 and {MAX_PAGE}")
+        if self.store.get_board(board_id) is None:
+            raise BoardNotFound(f"no board {board_id!r}")
+        if cursor is not None and not _EVENT_ID.match(cursor):
+            raise InvalidQuery("the cursor is not one this board gave out")
+        page = self.store.audit(board_id, cursor, limit)
+        return AuditPage(board_id=board_id, events=page.events, next_cursor=page.after)
+
+    def _racer_on(self, board_id: str, racer: str) -> str:
+        key = racer_key(racer)
+        if not self.store.history(key, board_id):
+            raise RacerNotFound(f"{racer!r} has no submissions on {board_id!r}")
+        return key
+
+    def _best_entry(self, board: Board, key: str) -> Entry | None:
+        """The racer's best entry, recomputed from their submissions on the board."""
+        best: Entry | None = None
+        for submission in self.store.history(key, board.board_id):
+            record = self.store.get_record(board.board_id, submission.submission_id)
+            if record is None:  # pragma: no cover - a submission always has its record
+                continue
+            entry = scored_write(record, board, submission.submitted_at)[1]
+            if best is None or entry.rank_key < best.rank_key:
+                best = entry
+        return best
+
+    def _moderation(self, board_id: str, racer: str, removed: bool) -> Moderation:
+        stored = self._require_board(board_id)
+        return Moderation(board=_board_view(stored, self.clock()), racer=racer,
+                          banned=racer_key(racer) in stored.board.banned, entry_removed=removed)
+
+    def _event(self, board_id: str, action: AuditAction, caller: Caller | None, at: datetime,
+               **details: Any) -> AuditEvent:
+        who = caller or Caller(principal="anonymous")
+        return AuditEvent(board_id=board_id, at=at, action=action, actor=who.principal,
+                          actor_name=who.name, event_id=_event_id(at), **details)
+
+    def _audit(self, board_id: str, action: AuditAction, caller: Caller | None,
+               **details: Any) -> None:
+        self.store.append_audit(self._event(board_id, action, caller, self.clock(), **details))
 
     def _named(self, board_id: str) -> StoredBoard:
         stored = self._require_board(board_id)
@@ -430,7 +603,7 @@ class LeaderboardService:
         return ExportPage(lines=lines,
                           next_cursor=_export_cursor("submissions", page.after) if page.after else None)
 
-    def import_board(self, board: Board) -> tuple[BoardView, bool]:
+    def import_board(self, board: Board, caller: Caller = LOCAL_ORGANISER) -> tuple[BoardView, bool]:
         """Create the exported board unless a board with its id exists (then that board's own
         settings stay). Returns the board and whether it was created."""
         now = self.clock()
@@ -444,16 +617,20 @@ class LeaderboardService:
             self._live(board.board_id, existing)
             return _board_view(existing, now), False
         stored = self.store.create_board(board)
+        self._audit(board.board_id, "import", caller, detail="board")
         return _board_view(stored, now), stored.board == board
 
-    def import_submission(self, board_id: str, item: ImportedSubmission) -> ImportReceipt:
+    def import_submission(self, board_id: str, item: ImportedSubmission,
+                          caller: Caller = LOCAL_ORGANISER) -> ImportReceipt:
         """Replay one exported submission with its first submission time, scored by this
         board's rules; the window and limits do not apply. Importing twice changes nothing."""
         board = self._require_board(board_id).board
         record = item.record
         _check_belongs(record, board)
         submission, entry = scored_write(record, board, item.submitted_at)
-        outcome = self.store.record_submission(submission, record, entry)
+        audit = self._event(board_id, "import", caller, self.clock(), racer=record.racer,
+                            submission_id=record.submission_id)
+        outcome = self.store.record_submission(submission, record, entry, audit=audit)
         if not outcome.duplicate and self.archive is not None:
             self.archive.put(board_id, record)
         return ImportReceipt(status="duplicate" if outcome.duplicate else "created",
@@ -464,6 +641,26 @@ _LOCKED = ("{!r} has entries: its track, timing method and minimum laps can no l
            "(create a new board, or export it and import into one with the new rules)")
 EXPORT_ENTRIES = 500
 EXPORT_SUBMISSIONS = 25  # with their records, up to 64 KiB each: a page stays under 2 MB
+
+
+_ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
+_EVENT_ID = re.compile(r"^[0-9T:.Z-]{27}-[0-9a-f]{8}$")
+
+
+def _event_id(at: datetime) -> str:
+    """Unique, and in time order: the moment, then random digits."""
+    return f"{ranking.timestamp(at)}-{secrets.token_hex(4)}"
+
+
+def evaluation_fingerprints(record: Record) -> list[str]:
+    """The sha256 of each evaluation's laps that completed a lap (what a copied run keeps,
+    whatever it renames): the board refuses one already there under another racer."""
+    return sorted({_fingerprint(run) for run in record.evaluations if run.laps_completed})
+
+
+def _fingerprint(run: EvaluationRun) -> str:
+    laps = [lap.model_dump(mode="json") for lap in run.laps]
+    return hashlib.sha256(json.dumps(laps, sort_keys=True).encode()).hexdigest()
 
 
 def is_default_board_id(board_id: str) -> bool:

@@ -21,6 +21,8 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from drboard_assembler.record import Record
 from drboard_functions.models import (
+    AliasClaim,
+    AuditEvent,
     Board,
     BoardRules,
     Entry,
@@ -30,10 +32,16 @@ from drboard_functions.models import (
     TimingMethod,
     WriteOutcome,
 )
-from drboard_functions.service import scored_write
-from drboard_functions.stores.base import BoardHasEntries, BoardStore, LimitReached
+from drboard_functions.service import evaluation_fingerprints, scored_write
+from drboard_functions.stores.base import (
+    AliasConflict,
+    BoardHasEntries,
+    BoardStore,
+    FingerprintTaken,
+    LimitReached,
+)
 
-from tests.recordkit import LapSpec, make_record
+from tests.recordkit import LapSpec, copy_of, make_record
 
 T0 = datetime(2025, 3, 1, 12, 0, tzinfo=UTC)
 TRACK = "reInvent2019_track"
@@ -62,7 +70,17 @@ def submit(store: BoardStore, record: Record, when: datetime, board: Board | Non
     if store.get_board(board.board_id) is None:
         store.create_board(board)
     submission, entry = write_for(record, board, when)
-    return store.record_submission(submission, record, entry, limits)
+    return store.record_submission(submission, record, entry, limits,
+                                   fingerprints=evaluation_fingerprints(record))
+
+
+def claim(alias: str, principal: str) -> AliasClaim:
+    return AliasClaim(racer_key=alias.casefold(), alias=alias, principal=principal, claimed_at=T0)
+
+
+def event(n: int, action: str = "push", board_id: str = TRACK) -> AuditEvent:
+    return AuditEvent.model_validate({"board_id": board_id, "at": at(n), "action": action,
+                                      "event_id": f"{at(n).isoformat()}-{n:08x}", "actor": "local"})
 
 
 def cooldown(seconds: int, now: datetime) -> SubmissionLimits:
@@ -477,3 +495,65 @@ class StoreContract:
         store.create_board(make_board("Oval_track", track="Oval_track"))
         empty, none = store.front_page("Oval_track", 5)
         assert empty is not None and empty.participants == 0 and none == []
+
+    # ---- copies, moderation, audit and aliases ----------------------------------------------
+
+    def test_a_copied_run_under_another_racer_is_refused_and_writes_nothing(
+            self, store: BoardStore) -> None:
+        original = make_record("Ada", lap(9000))
+        submit(store, original, at(0))
+        with pytest.raises(FingerprintTaken) as refused:
+            submit(store, copy_of(original, "Bob"), at(1))
+        assert refused.value.racer_key == "ada"
+        assert store.get_entry(TRACK, "bob") is None
+        assert store.history("bob") == [] and participants(store) == 1
+
+    def test_the_same_racer_may_push_their_evaluation_in_another_run(self, store: BoardStore) -> None:
+        original = make_record("Ada", lap(9000), model="m1")
+        submit(store, original, at(0))
+        assert not submit(store, make_record("Ada", lap(9000), model="m2"), at(1)).duplicate
+
+    def test_a_push_appends_its_audit_event_in_the_same_write(self, store: BoardStore) -> None:
+        board = make_board()
+        store.create_board(board)
+        record = make_record("Ada", lap(9000))
+        submission, entry = write_for(record, board, at(0))
+        store.record_submission(submission, record, entry, audit=event(0))
+        assert [e.action for e in store.audit(TRACK, None, 10).events] == ["push"]
+
+    def test_the_audit_trail_pages_in_time_order(self, store: BoardStore) -> None:
+        store.create_board(make_board())
+        for n in (2, 0, 1, 3, 4):
+            store.append_audit(event(n))
+        first = store.audit(TRACK, None, 3)
+        assert [e.at for e in first.events] == [at(0), at(1), at(2)]
+        rest = store.audit(TRACK, first.after, 3)
+        assert [e.at for e in rest.events] == [at(3), at(4)] and rest.after is None
+        assert store.audit("elsewhere", None, 3).events == []
+
+    def test_remove_and_restore_an_entry_keep_the_submissions(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada", lap(9000)), at(0))
+        submit(store, make_record("Bob", lap(9500)), at(1))
+        removed = store.remove_entry(TRACK, "ada")
+        assert removed is not None and removed.racer == "Ada"
+        assert [e.racer for e in store.top(TRACK, 10)] == ["Bob"] and participants(store) == 1
+        assert len(store.history("ada", TRACK)) == 1
+        assert store.remove_entry(TRACK, "ada") is None
+        store.restore_entry(removed)
+        store.restore_entry(removed)
+        assert [e.racer for e in store.top(TRACK, 10)] == ["Ada", "Bob"] and participants(store) == 2
+
+    def test_an_alias_is_claimed_once_by_one_sign_in(self, store: BoardStore) -> None:
+        assert store.claim_alias(claim("Ada", "cognito:1")).principal == "cognito:1"
+        assert store.claim_alias(claim("Ada", "cognito:1")).alias == "Ada", "claiming again is fine"
+        with pytest.raises(AliasConflict) as taken:
+            store.claim_alias(claim("Ada", "cognito:2"))
+        assert taken.value.holder.principal == "cognito:1"
+        with pytest.raises(AliasConflict):
+            store.claim_alias(claim("Ada2", "cognito:1"))
+        assert store.alias_of("cognito:2") is None
+        assert store.alias_holder("ada2") is None
+        holder = store.alias_holder("ada")
+        assert holder is not None and holder.principal == "cognito:1"
+        mine = store.alias_of("cognito:1")
+        assert mine is not None and mine.alias == "Ada"

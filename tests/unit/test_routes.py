@@ -18,12 +18,16 @@ from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, Dependen
 from drboard_assembler import limits
 from drboard_assembler.record import Record
 from drboard_functions.errors import (
+    AliasTaken,
+    Banned,
     BoardClosed,
     BoardExists,
     BoardLocked,
+    CopiedRun,
     DomainError,
     InvalidSubmission,
     NotAuthorized,
+    NotSignedIn,
     SubmissionLimitReached,
     TooSoon,
 )
@@ -975,11 +979,13 @@ def test_organiser_answers_carry_no_cors_headers(client: Client) -> None:
 @pytest.mark.parametrize(("error", "status"), [
     (BoardClosed("closed"), 403), (SubmissionLimitReached("all used"), 403),
     (NotAuthorized("not from here"), 403), (BoardExists("taken"), 409), (BoardLocked("locked"), 409),
+    (NotSignedIn("sign in"), 401), (AliasTaken("not yours"), 403), (Banned("banned"), 403),
+    (CopiedRun("a copy"), 409),
 ])
 def test_each_refusal_answers_its_status_and_names_itself(app: APIGatewayHttpResolver,
                                                           error: DomainError, status: int) -> None:
     class Refusing(LeaderboardService):
-        def create_board(self, spec: Any) -> BoardView:
+        def create_board(self, spec: Any, caller: Any = None) -> BoardView:
             raise error
 
     store = SqliteStore(":memory:")

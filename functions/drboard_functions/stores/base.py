@@ -2,11 +2,21 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
 from drboard_assembler.record import Record
 
-from ..models import Board, Entry, RacerTally, Submission, SubmissionLimits, WriteOutcome
+from ..models import (
+    AliasClaim,
+    AuditEvent,
+    Board,
+    Entry,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    WriteOutcome,
+)
 
 
 class StoredBoard(NamedTuple):
@@ -22,8 +32,29 @@ class LimitReached(Exception):
         self.tally = tally
 
 
+class AliasConflict(Exception):
+    """The alias is held by another sign-in, or the sign-in already holds another alias."""
+
+    def __init__(self, holder: AliasClaim) -> None:
+        super().__init__(f"{holder.alias!r} is held by {holder.principal}")
+        self.holder = holder
+
+
+class FingerprintTaken(Exception):
+    """An evaluation of the pushed run is already on the board under another racer."""
+
+    def __init__(self, racer_key: str) -> None:
+        super().__init__(f"already on the board as {racer_key!r}")
+        self.racer_key = racer_key
+
+
 class BoardHasEntries(Exception):
     """A change that would rescore entries was refused: the board has entries."""
+
+
+class AuditSlice(NamedTuple):
+    events: list[AuditEvent]
+    after: str | None  # where the next page starts; None on the last page
 
 
 class SubmissionPage(NamedTuple):
@@ -46,14 +77,18 @@ class BoardStore(Protocol):
         """Every board, deleted ones included, ordered by id."""
 
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
-                          limits: SubmissionLimits | None = None) -> WriteOutcome:
+                          limits: SubmissionLimits | None = None,
+                          fingerprints: Sequence[str] = (),
+                          audit: AuditEvent | None = None) -> WriteOutcome:
         """Atomically: store the submission unless its id is already on the board (a duplicate,
         which changes nothing and is never refused), and make ``entry`` the racer's entry if it
         has a strictly lower rank key than the current one (a better score, or an equal score
         achieved earlier). With ``limits``, a new submission is refused with LimitReached, and
         nothing written, when the racer's last one is under ``cooldown_s`` old or they have
-        reached ``max_submissions``. Concurrent calls never lose a submission or a best, and
-        never exceed a limit."""
+        reached ``max_submissions``. Each of ``fingerprints`` (its evaluations' content) is
+        claimed on the board for the racer: one already held by another racer refuses the push
+        with FingerprintTaken, nothing written. ``audit`` is appended in the same transaction.
+        Concurrent calls never lose a submission or a best, and never exceed a limit."""
 
     def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
         """One submission of the racer on the board."""
@@ -83,6 +118,32 @@ class BoardStore(Protocol):
 
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         """The full record of one submission."""
+
+    # ---- moderation and audit ---------------------------------------------------------------
+
+    def remove_entry(self, board_id: str, racer_key: str) -> Entry | None:
+        """Take the racer's entry off the board (its submissions stay); the removed entry."""
+
+    def restore_entry(self, entry: Entry) -> None:
+        """Put back an entry for a racer who has none on the board."""
+
+    def append_audit(self, event: AuditEvent) -> None:
+        """Add one event to its board's audit trail (append-only)."""
+
+    def audit(self, board_id: str, after: str | None, limit: int) -> AuditSlice:
+        """Up to ``limit`` of the board's audit events in time order, after the token ``after``."""
+
+    # ---- aliases ----------------------------------------------------------------------------
+
+    def claim_alias(self, claim: AliasClaim) -> AliasClaim:
+        """Bind the alias to the sign-in, atomically: unless either is bound to another (then
+        AliasConflict with the holder). Claiming one's own alias again returns the claim."""
+
+    def alias_of(self, principal: str) -> AliasClaim | None:
+        """The alias a sign-in holds."""
+
+    def alias_holder(self, racer_key: str) -> AliasClaim | None:
+        """Who holds an alias."""
 
 
 class RecordArchive(Protocol):

@@ -13,7 +13,14 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
   ``submitted_at`` for the sparse ``by_racer`` index that gives a racer's history across boards);
 - ``D#<submission_id>``: the submission's full record, zlib-compressed in ``record``. It sits
   apart from the submission because ``get_record`` knows the submission id but not the racer, and
-  so that history reads stay small; it carries no index attribute, so no index copies it.
+  so that history reads stay small; it carries no index attribute, so no index copies it;
+- ``F#<fingerprint>``: an evaluation's content on the board, and the racer (``racer_key``) who
+  pushed it first: a copy under another racer fails the push transaction;
+- ``A#<event_id>``: one audit event (``data``), written once and never changed.
+
+Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
+holds an alias's claim and ``P#<principal>`` the same claim by its sign-in, written together in
+one transaction on condition that neither exists.
 
 A push is one transaction: the submission (and its record) is put if absent; the racer's tally
 counts it, on condition that the board's limits allow it; and the entry is put if the racer has
@@ -27,7 +34,7 @@ from __future__ import annotations
 import random
 import time
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from datetime import timedelta
 from typing import TYPE_CHECKING, Any
 
@@ -37,8 +44,25 @@ from drboard_assembler.record import Record
 
 from .. import ranking
 from ..errors import BoardNotFound
-from ..models import Board, Entry, RacerTally, Submission, SubmissionLimits, WriteOutcome
-from .base import BoardHasEntries, LimitReached, StoredBoard, SubmissionPage
+from ..models import (
+    AliasClaim,
+    AuditEvent,
+    Board,
+    Entry,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    WriteOutcome,
+)
+from .base import (
+    AliasConflict,
+    AuditSlice,
+    BoardHasEntries,
+    FingerprintTaken,
+    LimitReached,
+    StoredBoard,
+    SubmissionPage,
+)
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
@@ -51,6 +75,7 @@ if TYPE_CHECKING:
     Item = dict[str, AttributeValueTypeDef]
 
 BOARD_SK = "#BOARD"
+ALIAS_PARTITION = "#ALIAS"
 FIRST_ENTRY = "0"  # every entry's rank key sorts after this, the board's before it
 BOARD_KIND = "board"
 RANK_INDEX = "by_rank"
@@ -83,6 +108,14 @@ def tally_sk(racer_key: str) -> str:
     return f"P#{racer_key}"
 
 
+def fingerprint_sk(fingerprint: str) -> str:
+    return f"F#{fingerprint}"
+
+
+def audit_sk(event_id: str) -> str:
+    return f"A#{event_id}"
+
+
 def _s(value: str) -> AttributeValueTypeDef:
     return {"S": value}
 
@@ -108,6 +141,17 @@ def submission_item(submission: Submission) -> Item:
         "submitted_at": _s(ranking.timestamp(submission.submitted_at)),
         "data": _s(submission.model_dump_json()),
     }
+
+
+def audit_item(event: AuditEvent) -> Item:
+    return {"board": _s(event.board_id), "sk": _s(audit_sk(event.event_id)),
+            "data": _s(event.model_dump_json())}
+
+
+def alias_items(claim: AliasClaim) -> list[Item]:
+    data = _s(claim.model_dump_json())
+    return [{"board": _s(ALIAS_PARTITION), "sk": _s(f"K#{claim.racer_key}"), "data": data},
+            {"board": _s(ALIAS_PARTITION), "sk": _s(f"P#{claim.principal}"), "data": data}]
 
 
 def record_item(board_id: str, record: Record) -> Item:
@@ -169,16 +213,27 @@ class DynamoDbStore:
     # ---- submissions ----------------------------------------------------------------------
 
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
-                          limits: SubmissionLimits | None = None) -> WriteOutcome:
+                          limits: SubmissionLimits | None = None,
+                          fingerprints: Sequence[str] = (),
+                          audit: AuditEvent | None = None) -> WriteOutcome:
         board_id, key = entry.board_id, entry.racer_key
         # Cancellation reasons come back in this order: 0 submission, 1 record, 2 tally,
-        # 3 entry, 4 board.
+        # then the fingerprints, the audit event, and last the entry and the board.
         stored: list[TransactWriteItemTypeDef] = [
             {"Put": {"TableName": self.table, "Item": submission_item(submission),
                      "ConditionExpression": "attribute_not_exists(sk)"}},
             {"Put": {"TableName": self.table, "Item": record_item(board_id, record)}},
             {"Update": self._count_submission(submission, limits)},
         ]
+        copies = slice(len(stored), len(stored) + len(fingerprints))
+        stored.extend({"Put": {
+            "TableName": self.table,
+            "Item": {"board": _s(board_id), "sk": _s(fingerprint_sk(f)), "racer_key": _s(key)},
+            "ConditionExpression": "attribute_not_exists(sk) OR racer_key = :me",
+            "ExpressionAttributeValues": {":me": _s(key)}}} for f in fingerprints)
+        if audit is not None:
+            stored.append({"Put": {"TableName": self.table, "Item": audit_item(audit)}})
+        board_at = len(stored) + 1
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 _backoff(attempt)
@@ -188,13 +243,7 @@ class DynamoDbStore:
             if current is None:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
                                       "ConditionExpression": "attribute_not_exists(sk)"}})
-                items.append({"Update": {
-                    "TableName": self.table,
-                    "Key": {"board": _s(board_id), "sk": _s(BOARD_SK)},
-                    "UpdateExpression": "SET participants = participants + :one",
-                    "ConditionExpression": "attribute_exists(sk)",
-                    "ExpressionAttributeValues": {":one": {"N": "1"}},
-                }})
+                items.append(self._participants(board_id, +1))
             elif improves:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
                                       "ConditionExpression": "rank_key > :new",
@@ -207,10 +256,12 @@ class DynamoDbStore:
                     raise
                 reasons = _cancellation_codes(error)
                 if reasons[:1] == ["ConditionalCheckFailed"]:
-                    return self._duplicate(board_id, key)
+                    return self._duplicate(board_id, key, entry)
                 if reasons[2:3] == ["ConditionalCheckFailed"]:
                     raise LimitReached(self.tally(board_id, key)) from None
-                if reasons[4:5] == ["ConditionalCheckFailed"]:
+                if "ConditionalCheckFailed" in reasons[copies]:
+                    raise FingerprintTaken(self._copied_from(board_id, fingerprints)) from None
+                if current is None and reasons[board_at:board_at + 1] == ["ConditionalCheckFailed"]:
                     raise BoardNotFound(f"no board {board_id!r}") from None
                 if not set(reasons) & {"ConditionalCheckFailed", "TransactionConflict"}:
                     raise
@@ -263,10 +314,99 @@ class DynamoDbStore:
             if _code(error) != "ConditionalCheckFailedException":
                 raise
 
-    def _duplicate(self, board_id: str, racer_key: str) -> WriteOutcome:
+    def _duplicate(self, board_id: str, racer_key: str, entry: Entry) -> WriteOutcome:
         current = self.get_entry(board_id, racer_key)
-        assert current is not None, "a stored submission always has an entry"
-        return WriteOutcome(duplicate=True, improved=False, entry=current)
+        return WriteOutcome(duplicate=True, improved=False, entry=current or entry)
+
+    def _copied_from(self, board_id: str, fingerprints: Sequence[str]) -> str:
+        holders = [item["racer_key"]["S"] for f in fingerprints
+                   if (item := self._get(board_id, fingerprint_sk(f)))]
+        return holders[0] if holders else "another racer"
+
+    # ---- moderation and audit -------------------------------------------------------------
+
+    def remove_entry(self, board_id: str, racer_key: str) -> Entry | None:
+        for attempt in range(MAX_ATTEMPTS):
+            if attempt:
+                _backoff(attempt)
+            current = self.get_entry(board_id, racer_key)
+            if current is None:
+                return None
+            try:
+                self.client.transact_write_items(TransactItems=[
+                    {"Delete": {"TableName": self.table,
+                                "Key": {"board": _s(board_id), "sk": _s(entry_sk(racer_key))},
+                                "ConditionExpression": "rank_key = :seen",
+                                "ExpressionAttributeValues": {":seen": _s(current.rank_key)}}},
+                    self._participants(board_id, -1)])
+            except ClientError as error:
+                if _code(error) != "TransactionCanceledException":
+                    raise
+                continue  # the entry improved meanwhile: remove what is there now
+            return current
+        raise StoreContention(f"gave up removing an entry from {board_id!r}")
+
+    def restore_entry(self, entry: Entry) -> None:
+        try:
+            self.client.transact_write_items(TransactItems=[
+                {"Put": {"TableName": self.table, "Item": entry_item(entry),
+                         "ConditionExpression": "attribute_not_exists(sk)"}},
+                self._participants(entry.board_id, +1)])
+        except ClientError as error:
+            if _code(error) != "TransactionCanceledException":
+                raise  # cancelled: the racer has an entry again, from a push meanwhile
+
+    def _participants(self, board_id: str, change: int) -> TransactWriteItemTypeDef:
+        return {"Update": {
+            "TableName": self.table, "Key": {"board": _s(board_id), "sk": _s(BOARD_SK)},
+            "UpdateExpression": "SET participants = participants + :change",
+            "ConditionExpression": "attribute_exists(sk)",
+            "ExpressionAttributeValues": {":change": {"N": str(change)}}}}
+
+    def append_audit(self, event: AuditEvent) -> None:
+        self.client.put_item(TableName=self.table, Item=audit_item(event),
+                             ConditionExpression="attribute_not_exists(sk)")
+
+    def audit(self, board_id: str, after: str | None, limit: int) -> AuditSlice:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":board": _s(board_id), ":prefix": _s(audit_sk(""))},
+            "ProjectionExpression": "#data", "ExpressionAttributeNames": {"#data": "data"},
+        }
+        if after is not None:
+            request["ExclusiveStartKey"] = {"board": _s(board_id), "sk": _s(audit_sk(after))}
+        events = [AuditEvent.model_validate_json(item["data"]["S"])
+                  for item in self._query(request, limit=limit)]
+        return AuditSlice(events, events[-1].event_id if len(events) == limit else None)
+
+    # ---- aliases --------------------------------------------------------------------------
+
+    def claim_alias(self, claim: AliasClaim) -> AliasClaim:
+        try:
+            self.client.transact_write_items(TransactItems=[
+                {"Put": {"TableName": self.table, "Item": item,
+                         "ConditionExpression": "attribute_not_exists(sk)"}}
+                for item in alias_items(claim)])
+        except ClientError as error:
+            if _code(error) != "TransactionCanceledException":
+                raise
+            for holder in (self.alias_holder(claim.racer_key), self.alias_of(claim.principal)):
+                if holder is None:
+                    continue
+                if (holder.racer_key, holder.principal) == (claim.racer_key, claim.principal):
+                    return holder
+                raise AliasConflict(holder) from None
+            raise  # pragma: no cover - cancelled, yet neither item exists
+        return claim
+
+    def alias_of(self, principal: str) -> AliasClaim | None:
+        item = self._get(ALIAS_PARTITION, f"P#{principal}")
+        return AliasClaim.model_validate_json(item["data"]["S"]) if item else None
+
+    def alias_holder(self, racer_key: str) -> AliasClaim | None:
+        item = self._get(ALIAS_PARTITION, f"K#{racer_key}")
+        return AliasClaim.model_validate_json(item["data"]["S"]) if item else None
 
     # ---- reads ----------------------------------------------------------------------------
 

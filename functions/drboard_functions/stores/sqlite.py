@@ -8,15 +8,32 @@ from __future__ import annotations
 
 import sqlite3
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
 from drboard_assembler.record import Record
 
 from .. import ranking
-from ..models import Board, Entry, RacerTally, Submission, SubmissionLimits, WriteOutcome
-from .base import BoardHasEntries, LimitReached, StoredBoard, SubmissionPage
+from ..models import (
+    AliasClaim,
+    AuditEvent,
+    Board,
+    Entry,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    WriteOutcome,
+)
+from .base import (
+    AliasConflict,
+    AuditSlice,
+    BoardHasEntries,
+    FingerprintTaken,
+    LimitReached,
+    StoredBoard,
+    SubmissionPage,
+)
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
@@ -43,6 +60,23 @@ CREATE TABLE IF NOT EXISTS submissions (
     PRIMARY KEY (board_id, submission_id)
 );
 CREATE INDEX IF NOT EXISTS submissions_by_racer ON submissions (racer_key, submitted_at);
+CREATE TABLE IF NOT EXISTS fingerprints (
+    board_id    TEXT NOT NULL,
+    fingerprint TEXT NOT NULL,
+    racer_key   TEXT NOT NULL,
+    PRIMARY KEY (board_id, fingerprint)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS audit (
+    board_id TEXT NOT NULL,
+    event_id TEXT NOT NULL,
+    event    TEXT NOT NULL,
+    PRIMARY KEY (board_id, event_id)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS aliases (
+    racer_key TEXT PRIMARY KEY,
+    principal TEXT NOT NULL UNIQUE,
+    claim     TEXT NOT NULL
+);
 """
 
 BUSY_TIMEOUT_S = 30.0
@@ -124,14 +158,18 @@ class SqliteStore:
     # ---- submissions ----------------------------------------------------------------------
 
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
-                          limits: SubmissionLimits | None = None) -> WriteOutcome:
+                          limits: SubmissionLimits | None = None,
+                          fingerprints: Sequence[str] = (),
+                          audit: AuditEvent | None = None) -> WriteOutcome:
         with self._write() as db:
             current = self._entry(db, entry.board_id, entry.racer_key)
             if self._has_submission(db, submission.board_id, submission.submission_id):
-                assert current is not None, "a stored submission always has an entry"
-                return WriteOutcome(duplicate=True, improved=False, entry=current)
+                return WriteOutcome(duplicate=True, improved=False, entry=current or entry)
             if limits is not None:
                 _check_limits(self._tally(db, submission.board_id, submission.racer_key), limits)
+            self._claim_fingerprints(db, entry.board_id, entry.racer_key, fingerprints)
+            if audit is not None:
+                self._append_audit(db, audit)
             db.execute(
                 "INSERT INTO submissions VALUES (?, ?, ?, ?, ?, ?)",
                 (submission.board_id, submission.submission_id, submission.racer_key,
@@ -149,6 +187,17 @@ class SqliteStore:
                 db.execute("UPDATE boards SET participants = participants + 1 WHERE board_id = ?",
                            (entry.board_id,))
             return WriteOutcome(duplicate=False, improved=True, entry=entry)
+
+    @staticmethod
+    def _claim_fingerprints(db: sqlite3.Connection, board_id: str, racer_key: str,
+                            fingerprints: Sequence[str]) -> None:
+        for fingerprint in fingerprints:
+            row = db.execute("SELECT racer_key FROM fingerprints WHERE board_id = ? AND fingerprint = ?",
+                             (board_id, fingerprint)).fetchone()
+            if row is not None and row[0] != racer_key:
+                raise FingerprintTaken(row[0])
+            db.execute("INSERT OR IGNORE INTO fingerprints VALUES (?, ?, ?)",
+                       (board_id, fingerprint, racer_key))
 
     @staticmethod
     def _has_submission(db: sqlite3.Connection, board_id: str, submission_id: str) -> bool:
@@ -227,6 +276,70 @@ class SqliteStore:
             "SELECT record FROM submissions WHERE board_id = ? AND submission_id = ?",
             (board_id, submission_id)).fetchone()
         return Record.model_validate_json(row[0]) if row else None
+
+    # ---- moderation and audit -------------------------------------------------------------
+
+    def remove_entry(self, board_id: str, racer_key: str) -> Entry | None:
+        with self._write() as db:
+            current = self._entry(db, board_id, racer_key)
+            if current is not None:
+                db.execute("DELETE FROM entries WHERE board_id = ? AND racer_key = ?", (board_id, racer_key))
+                db.execute("UPDATE boards SET participants = participants - 1 WHERE board_id = ?",
+                           (board_id,))
+            return current
+
+    def restore_entry(self, entry: Entry) -> None:
+        with self._write() as db:
+            added = db.execute(
+                "INSERT OR IGNORE INTO entries VALUES (?, ?, ?, ?, ?)",
+                (entry.board_id, entry.racer_key, entry.score_key, entry.rank_key,
+                 entry.model_dump_json())).rowcount
+            if added:
+                db.execute("UPDATE boards SET participants = participants + 1 WHERE board_id = ?",
+                           (entry.board_id,))
+
+    def append_audit(self, event: AuditEvent) -> None:
+        with self._write() as db:
+            self._append_audit(db, event)
+
+    @staticmethod
+    def _append_audit(db: sqlite3.Connection, event: AuditEvent) -> None:
+        db.execute("INSERT INTO audit VALUES (?, ?, ?)",
+                   (event.board_id, event.event_id, event.model_dump_json()))
+
+    def audit(self, board_id: str, after: str | None, limit: int) -> AuditSlice:
+        rows = self._db.execute(
+            "SELECT event_id, event FROM audit WHERE board_id = ? AND event_id > ? "
+            "ORDER BY event_id LIMIT ?", (board_id, after or "", limit)).fetchall()
+        events = [AuditEvent.model_validate_json(row[1]) for row in rows]
+        return AuditSlice(events, rows[-1][0] if len(rows) == limit else None)
+
+    # ---- aliases --------------------------------------------------------------------------
+
+    def claim_alias(self, claim: AliasClaim) -> AliasClaim:
+        with self._write() as db:
+            for holder in (self._alias(db, "racer_key", claim.racer_key),
+                           self._alias(db, "principal", claim.principal)):
+                if holder is None:
+                    continue
+                if (holder.racer_key, holder.principal) == (claim.racer_key, claim.principal):
+                    return holder
+                raise AliasConflict(holder)
+            db.execute("INSERT INTO aliases VALUES (?, ?, ?)",
+                       (claim.racer_key, claim.principal, claim.model_dump_json()))
+            return claim
+
+    def alias_of(self, principal: str) -> AliasClaim | None:
+        return self._alias(self._db, "principal", principal)
+
+    def alias_holder(self, racer_key: str) -> AliasClaim | None:
+        return self._alias(self._db, "racer_key", racer_key)
+
+    @staticmethod
+    def _alias(db: sqlite3.Connection, column: str, value: str) -> AliasClaim | None:
+        assert column in ("racer_key", "principal")
+        row = db.execute(f"SELECT claim FROM aliases WHERE {column} = ?", (value,)).fetchone()
+        return AliasClaim.model_validate_json(row[0]) if row else None
 
 
 def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
