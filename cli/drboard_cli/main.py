@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import signal
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -20,10 +22,11 @@ from drboard_functions import errors as domain
 from drboard_functions.models import MAX_COOLDOWN_S, TimingMethod
 from rich.console import Console
 
-from . import board_options, config, render, transfer
+from . import board_options, config, render, tokens, transfer
 from .target import BoardClient, local_board
 
 FORMATS = ("table", "json", "csv", "markdown")
+AUDIT_PAGE = 500
 BAD_INPUT = 2
 FAILURE = 1
 
@@ -509,6 +512,72 @@ def board_restore(ctx: Context, board_id: str) -> None:
         out.print(render.board_panel(ctx.board.restore_board(board_id)))
 
 
+@board_group.command(name="remove-entry")
+@click.argument("board_id", metavar="BOARD")
+@click.argument("racer")
+@pass_context
+def board_remove_entry(ctx: Context, board_id: str, racer: str) -> None:
+    """Take RACER's entry off BOARD; their submissions are kept, the standings recomputed."""
+    with edge():
+        out.print(render.moderation_line(ctx.board.remove_entry(board_id, racer), "remove-entry"),
+                  soft_wrap=True)
+
+
+@board_group.command(name="ban")
+@click.argument("board_id", metavar="BOARD")
+@click.argument("racer")
+@pass_context
+def board_ban(ctx: Context, board_id: str, racer: str) -> None:
+    """Refuse RACER's pushes to BOARD and take their entry off it (submissions are kept)."""
+    with edge():
+        out.print(render.moderation_line(ctx.board.ban(board_id, racer), "ban"), soft_wrap=True)
+
+
+@board_group.command(name="unban")
+@click.argument("board_id", metavar="BOARD")
+@click.argument("racer")
+@pass_context
+def board_unban(ctx: Context, board_id: str, racer: str) -> None:
+    """Let RACER push to BOARD again, and put their best submission back."""
+    with edge():
+        out.print(render.moderation_line(ctx.board.unban(board_id, racer), "unban"), soft_wrap=True)
+
+
+@cli.command()
+@click.argument("board_id", metavar="BOARD")
+@click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
+              show_default=True, help=FORMAT_HELP)
+@pass_context
+def audit(ctx: Context, board_id: str, fmt: str) -> None:
+    """Every accepted push and every organiser action on BOARD: who, when, what (organisers)."""
+    with edge():
+        events = []
+        cursor: str | None = None
+        while True:
+            page = ctx.board.audit(board_id, cursor, AUDIT_PAGE)
+            events.extend(page.events)
+            cursor = page.next_cursor
+            if cursor is None:
+                break
+        if fmt == "json":
+            out.print_json(data=[e.model_dump(mode="json") for e in events])
+        else:
+            out.print(render.audit_table(board_id, events))
+
+
+@cli.command()
+@click.argument("name", required=False)
+@pass_context
+def alias(ctx: Context, name: str | None) -> None:
+    """Claim NAME as the racer alias you push as, or show the one you hold.
+
+    An alias is claimed once, by one sign-in; your first push claims its racer's alias too.
+    """
+    with edge():
+        me = ctx.board.claim_alias(name) if name else ctx.board.me()
+        out.print(render.me_line(me), soft_wrap=True)
+
+
 # ---- export and import -------------------------------------------------------------------
 
 
@@ -606,16 +675,21 @@ def configure(stack_name: str | None, region: str | None, endpoint_url: str | No
 @click.option("--table", help="Serve a DynamoDB table instead of the embedded board.")
 @click.option("--endpoint-url", metavar="URL",
               help="With --table: the DynamoDB endpoint, e.g. DynamoDB Local's http://127.0.0.1:8001.")
+@click.option("--code-minutes", type=click.IntRange(1, 7 * 24 * 60), default=60, show_default=True,
+              help="How long each join code is good for; a new one is printed when it runs out.")
 @pass_context
-def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: str | None) -> None:
+def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: str | None,
+          code_minutes: int) -> None:
     """Host the board over HTTP with the cloud board's own API, e.g. on an event laptop.
 
-    Racers push to it with `--endpoint http://HOST:PORT`. The organiser commands (`drboard
-    board ...`, `export`, `import`) are answered only on this machine itself. Ctrl-C stops it;
-    every push that was answered is saved.
+    Racers on your network join with the code it prints (`drboard join CODE --endpoint
+    http://HOST:PORT`), then push as the alias their first push claims. The organiser commands
+    (`drboard board ...`, `audit`, `export`, `import`) are answered only on this machine itself.
+    Ctrl-C stops it; every push that was answered is saved.
     """
     from drboard_functions.service import LeaderboardService
 
+    from .joins import JoinDesk
     from .serve import BoardServer
 
     with edge():
@@ -631,18 +705,76 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         else:
             service = LeaderboardService(local_board_store(ctx.db))
             where = str(ctx.db)
-        server = BoardServer((host, port), service)
+        desk = JoinDesk(ctx.db.with_name(ctx.db.stem + ".joined.sqlite"), code_minutes)
+        server = BoardServer((host, port), service, desk)
         bound_host, bound_port = str(server.server_address[0]), int(server.server_address[1])
+        url = f"http://{_reachable(bound_host)}:{bound_port}"
         out.print(f"Serving {where} on http://{bound_host}:{bound_port}  (Ctrl-C to stop)",
                   soft_wrap=True)
-        out.file.flush()
+        stop = threading.Event()
+        announcer = threading.Thread(target=_announce_codes, args=(desk, url, stop), daemon=True)
+        announcer.start()
         signal.signal(signal.SIGTERM, _interrupt)
         try:
             server.serve_forever()
         except KeyboardInterrupt:
             out.print("Stopping…")
         finally:
+            stop.set()
             server.server_close()
+            desk.close()
+
+
+def _announce_codes(desk: Any, url: str, stop: threading.Event) -> None:
+    """Print the join code, and each new one when the last runs out."""
+    shown = None
+    while True:
+        code = desk.current_code()
+        if code != shown:
+            out.print(f"Racers join with code [bold]{code.code}[/] (good until "
+                      f"{code.expires_at:%H:%M} UTC): drboard join {code.code} --endpoint {url}",
+                      soft_wrap=True, highlight=False)
+            out.file.flush()
+            shown = code
+        wait = (code.expires_at - datetime.now(UTC)).total_seconds()
+        if stop.wait(max(1.0, min(wait, 60.0))):
+            return
+
+
+def _reachable(host: str) -> str:
+    """The address racers reach this computer at: for 0.0.0.0, its own on the network."""
+    if host not in ("0.0.0.0", "::"):
+        return f"[{host}]" if ":" in host else host
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("10.254.254.254", 1))  # no packet is sent: this only picks a route
+            return str(probe.getsockname()[0])
+        except OSError:
+            return socket.gethostname()
+
+
+@cli.command()
+@click.argument("code")
+@pass_context
+def join(ctx: Context, code: str) -> None:
+    """Sign in to a `drboard serve` board with the join code its organiser shows.
+
+    Give the board with `--endpoint URL` (or `drboard configure --endpoint URL` first). The
+    token it answers is saved for that board in your user config folder, readable by you only.
+    """
+    from .remote import HttpBoard
+
+    with edge():
+        if not ctx.endpoint:
+            raise click.UsageError("give the board: drboard --endpoint http://HOST:PORT join CODE")
+        board = HttpBoard(str(ctx.endpoint))
+        joined = board.join(code)
+        tokens.save(board.endpoint, tokens.SavedToken(kind="join", access_token=joined.token,
+                                                      username=joined.principal))
+        out.print(f"Joined {board.endpoint} as {joined.principal}. Your first push claims your "
+                  "racer alias (or claim it now with `drboard alias NAME`).", soft_wrap=True)
 
 
 def _interrupt(signum: int, frame: Any) -> None:

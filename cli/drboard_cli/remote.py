@@ -22,6 +22,8 @@ from typing import Any, TypeVar
 from drboard_assembler.record import Record
 from drboard_functions import errors
 from drboard_functions.models import (
+    AliasRequest,
+    AuditPage,
     Board,
     BoardChanges,
     BoardPage,
@@ -31,6 +33,8 @@ from drboard_functions.models import (
     HistoryItem,
     ImportedSubmission,
     ImportReceipt,
+    Me,
+    Moderation,
     PushReceipt,
     RacerHistory,
     RacerSummary,
@@ -40,6 +44,7 @@ from drboard_functions.service import default_board_id
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from . import tokens
+from .joins import Joined, JoinRequest
 
 T = TypeVar("T", bound=BaseModel)
 
@@ -125,6 +130,35 @@ class HttpBoard:
     def import_submission(self, board_id: str, item: ImportedSubmission) -> ImportReceipt:
         answer = self._call("POST", f"/boards/{_quote(board_id)}/imports", body=item, signed=True)
         return _parse(ImportReceipt, answer)
+
+    # ---- the signed-in caller, moderation and audit ---------------------------------------
+
+    def join(self, code: str) -> Joined:
+        """Join a `drboard serve` board with its join code (the answer holds a new token)."""
+        return _parse(Joined, self._call("POST", "/join", body=JoinRequest(code=code)))
+
+    def me(self) -> Me:
+        return _parse(Me, self._call("GET", "/me", signed=True))
+
+    def claim_alias(self, alias: str) -> Me:
+        return _parse(Me, self._call("PUT", "/me/alias", body=AliasRequest(alias=alias), signed=True))
+
+    def remove_entry(self, board_id: str, racer: str) -> Moderation:
+        path = f"/boards/{_quote(board_id)}/racers/{_quote(racer)}"
+        return _parse(Moderation, self._call("DELETE", path, signed=True))
+
+    def ban(self, board_id: str, racer: str) -> Moderation:
+        path = f"/boards/{_quote(board_id)}/bans/{_quote(racer)}"
+        return _parse(Moderation, self._call("PUT", path, signed=True))
+
+    def unban(self, board_id: str, racer: str) -> Moderation:
+        path = f"/boards/{_quote(board_id)}/bans/{_quote(racer)}"
+        return _parse(Moderation, self._call("DELETE", path, signed=True))
+
+    def audit(self, board_id: str, cursor: str | None, limit: int) -> AuditPage:
+        answer = self._call("GET", f"/boards/{_quote(board_id)}/audit",
+                            query={"cursor": cursor, "limit": str(limit)}, signed=True)
+        return _parse(AuditPage, answer)
 
     # ---- HTTP ---------------------------------------------------------------------------
 

@@ -22,11 +22,14 @@ from drboard_functions.display import (
     when,
 )
 from drboard_functions.models import (
+    AuditEvent,
     BoardPage,
     BoardStatus,
     BoardView,
     EntryView,
     HistoryItem,
+    Me,
+    Moderation,
     PushReceipt,
     RacerStatus,
     RacerSummary,
@@ -250,6 +253,35 @@ def history_table(racer: str, items: Iterable[HistoryItem]) -> Table:
                       item.model_name, result, seconds(item.best_lap_ms),
                       str(item.laps_completed), "★" if item.is_best else "")
     return table
+
+
+def moderation_line(moderation: Moderation, action: str) -> Text:
+    board = moderation.board
+    said = {
+        "remove-entry": (f"Took {moderation.racer} off {board.board_id}." if moderation.entry_removed
+                         else f"{moderation.racer} had no entry on {board.board_id}."),
+        "ban": f"Banned {moderation.racer} from {board.board_id}: their pushes are refused.",
+        "unban": f"{moderation.racer} may push to {board.board_id} again.",
+    }[action]
+    return Text(f"{said} {plural(board.participants, 'racer')} on the board; every submission "
+                "is kept (`drboard audit " + board.board_id + "` lists who did what).")
+
+
+def audit_table(board_id: str, events: Iterable[AuditEvent]) -> Table:
+    table = Table(title=f"Audit trail of {board_id}", header_style="bold")
+    for name in ("When (UTC)", "Action", "Who", "Racer", "Submission", "Detail"):
+        table.add_column(name, overflow="fold")
+    for event in events:
+        who = f"{event.actor_name} ({event.actor})" if event.actor_name else event.actor
+        table.add_row(event.at.astimezone(UTC).strftime("%Y-%m-%d %H:%M:%S"), event.action, who,
+                      event.racer or "", (event.submission_id or "")[:12], event.detail)
+    return table
+
+
+def me_line(me: Me) -> Text:
+    role = "an organiser" if me.organiser else "a racer"
+    alias = f"you push as {me.alias}" if me.alias else "no alias yet (your first push claims one)"
+    return Text(f"Signed in as {me.name or me.principal} ({me.principal}), {role}; {alias}.")
 
 
 def status_table(summary: RacerSummary) -> Table:

@@ -3,12 +3,16 @@
 Each HTTP request becomes an API Gateway HTTP API (v2) event for the same routes the cloud board
 runs, so an event laptop hosts exactly the board that `sam deploy` would.
 
-The organisers' routes (tag ``admin``: create, change, close, delete, restore, export, import)
-are answered only to the computer that runs `serve` (a loopback address): in the cloud, IAM
-decides who may call them; here, the organiser is whoever sits at the serving laptop. Anyone else
-on the network gets 403 ``NotAuthorized`` before the request is even parsed. The address is the
-connection's own; a forwarding header cannot claim loopback. (Behind a reverse proxy on the same
-computer every request would look local: do not put one in front of `serve`.)
+The organisers' routes (tag ``admin``: create, change, close, delete, restore, moderate, audit,
+export, import) are answered only to the computer that runs `serve` (a loopback address): in the
+cloud, IAM decides who may call them; here, the organiser is whoever sits at the serving laptop.
+Anyone else on the network gets 403 ``NotAuthorized`` before the request is even parsed. The
+address is the connection's own; a forwarding header cannot claim loopback. (Behind a reverse
+proxy on the same computer every request would look local: do not put one in front of `serve`.)
+
+Racers on the network sign in with the join code `serve` prints (``POST /join``, answered here
+and not by the routes): each gets a token of their own, sent as a bearer token, which this server
+turns into the caller of the request (see :mod:`drboard_cli.joins`). Unsigned pushes are refused.
 """
 
 from __future__ import annotations
@@ -24,10 +28,13 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, urlsplit
 
-from drboard_functions.errors import NotAuthorized
-from drboard_functions.identity import LOCAL_ORGANISER
+from drboard_functions.errors import DomainError, InvalidQuery, NotAuthorized
+from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
 from drboard_functions.service import LeaderboardService
+from pydantic import ValidationError
 from rich.console import Console
+
+from .joins import JoinDesk, JoinRequest, WrongCode
 
 if TYPE_CHECKING:
     from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
@@ -112,11 +119,14 @@ class BoardServer(ThreadingHTTPServer):
     daemon_threads = False  # on shutdown, let requests in flight finish: nothing is lost
     block_on_close = True
 
-    def __init__(self, address: tuple[str, int], service: LeaderboardService) -> None:
+    def __init__(self, address: tuple[str, int], service: LeaderboardService,
+                 desk: JoinDesk | None = None) -> None:
         from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
 
         super().__init__(address, _Handler)
         self.service = service
+        self.desk = desk
+        self.sign_in = SignIn(kind="join-code" if desk else "none")
         self.app = build_app(push_router, pull_router, admin_router)
         # Other computers are served by a resolver without the organiser routes at all; asking
         # for one of those is answered 403 rather than 404.
@@ -129,20 +139,46 @@ class BoardServer(ThreadingHTTPServer):
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
         http = event["requestContext"]["http"]
         local = is_loopback(http["sourceIp"])
+        if http["method"] == "POST" and event["rawPath"] == "/join":
+            return self._join(event.get("body") or "")
         if not local and self.organiser_routes.matches(http["method"], event["rawPath"]):
             return _refused(NotAuthorized(
                 "organiser requests are answered only on the computer running `drboard serve`; "
                 f"this one came from {http['sourceIp']}"))
-        if local:  # the organiser at this computer; serve builds every event, so none can claim it
-            event["requestContext"]["authorizer"] = {"lambda": LOCAL_ORGANISER.model_dump()}
+        # serve builds every event itself, so no client can claim an authorizer context
+        caller = LOCAL_ORGANISER if local else self._racer(event["headers"])
+        if caller is not None:
+            event["requestContext"]["authorizer"] = {"lambda": caller.model_dump()}
         app = self.app if local else self.public_app
         with self.lock:
-            app.append_context(service=self.service)
+            app.append_context(service=self.service, sign_in=self.sign_in)
             context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
             return app.resolve(event, context)  # type: ignore[arg-type]
 
 
-def _refused(error: NotAuthorized) -> dict[str, Any]:
+    def _racer(self, headers: dict[str, str]) -> Caller | None:
+        """The racer a request's bearer token signs in, or None."""
+        scheme, _, token = headers.get("authorization", "").partition(" ")
+        if self.desk is None or scheme.lower() != "bearer" or not token.strip():
+            return None
+        return self.desk.caller(token.strip())
+
+    def _join(self, body: str) -> dict[str, Any]:
+        if self.desk is None:
+            return _refused(NotAuthorized("this board takes no join codes"))
+        try:
+            request = JoinRequest.model_validate_json(body)
+        except ValidationError:
+            return _refused(InvalidQuery('send {"code": "<the join code>"} as JSON'))
+        try:
+            joined = self.desk.join(request.code)
+        except WrongCode as wrong:
+            return _refused(NotAuthorized(str(wrong)))
+        return {"statusCode": 201, "headers": {"Content-Type": "application/json"},
+                "body": joined.model_dump_json(), "isBase64Encoded": False}
+
+
+def _refused(error: DomainError) -> dict[str, Any]:
     """The answer the routes would give the error (its status from the one mapping)."""
     from drboard_functions.routes import error_body, status_of
 

@@ -378,7 +378,7 @@ def get_me(service: Service, caller: SignedIn) -> Me:
 @takes(ALIAS_BODY)
 def put_my_alias(request: Annotated[AliasRequest, Body(description="The alias to claim.")],
                  service: Service, caller: SignedIn) -> Me:
-    return service.claim_alias(caller, request.alias)
+    return service.claim_alias(request.alias, caller=caller)
 
 
 # ---- pull ---------------------------------------------------------------------------------------

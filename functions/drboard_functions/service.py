@@ -230,14 +230,14 @@ class LeaderboardService:
 
     # ---- who is calling -------------------------------------------------------------------
 
-    def me(self, caller: Caller | None) -> Me:
+    def me(self, caller: Caller | None = LOCAL_ORGANISER) -> Me:
         if caller is None:
             raise NotSignedIn("not signed in: `drboard login` or `drboard join CODE`")
         claim = self.store.alias_of(caller.principal)
         return Me(principal=caller.principal, name=caller.name, organiser=caller.organiser,
                   alias=claim.alias if claim else None)
 
-    def claim_alias(self, caller: Caller | None, alias: str) -> Me:
+    def claim_alias(self, alias: str, caller: Caller | None = LOCAL_ORGANISER) -> Me:
         """Claim the alias the caller will push as (once: an alias is not renamed)."""
         if caller is None:
             raise NotSignedIn("sign in to claim an alias: `drboard login` or `drboard join CODE`")
@@ -490,34 +490,36 @@ class LeaderboardService:
         """Take the racer's entry off the board; their submissions stay, and their next push
         makes a new entry."""
         self._require_board(board_id)
-        removed = self.store.remove_entry(board_id, self._racer_on(board_id, racer))
-        self._audit(board_id, "remove-entry", caller, racer=racer,
+        key, name = self._racer_on(board_id, racer)
+        removed = self.store.remove_entry(board_id, key)
+        self._audit(board_id, "remove-entry", caller, racer=name,
                     submission_id=removed.submission_id if removed else None)
-        return self._moderation(board_id, racer, removed=removed is not None)
+        return self._moderation(board_id, name, removed=removed is not None)
 
     def ban(self, board_id: str, racer: str, caller: Caller = LOCAL_ORGANISER) -> Moderation:
         """Refuse the racer's pushes to the board and take their entry off it (their
-        submissions stay: `unban` puts their best back)."""
+        submissions stay: `unban` puts their best back). A racer may be banned before their
+        first push."""
         board = self._require_board(board_id).board
-        key = racer_key(racer)
+        key, name = racer_key(racer), self._known_name(board_id, racer)
         if key not in board.banned:
             self._save(board.model_copy(update={"banned": [*board.banned, key]}))
         removed = self.store.remove_entry(board_id, key)
-        self._audit(board_id, "ban", caller, racer=racer)
-        return self._moderation(board_id, racer, removed=removed is not None)
+        self._audit(board_id, "ban", caller, racer=name)
+        return self._moderation(board_id, name, removed=removed is not None)
 
     def unban(self, board_id: str, racer: str, caller: Caller = LOCAL_ORGANISER) -> Moderation:
         """Take the racer off the board's ban list and put their best submission back."""
         board = self._require_board(board_id).board
-        key = racer_key(racer)
+        key, name = racer_key(racer), self._known_name(board_id, racer)
         if key in board.banned:
             board = board.model_copy(update={"banned": [k for k in board.banned if k != key]})
             self._save(board)
         best = self._best_entry(board, key)
         if best is not None:
             self.store.restore_entry(best)
-        self._audit(board_id, "unban", caller, racer=racer)
-        return self._moderation(board_id, racer, removed=False)
+        self._audit(board_id, "unban", caller, racer=name)
+        return self._moderation(board_id, name, removed=False)
 
     def audit(self, board_id: str, cursor: str | None = None, limit: int = 100) -> AuditPage:
         """The board's audit trail, oldest first, ``limit`` events at a time."""
@@ -530,11 +532,17 @@ class LeaderboardService:
         page = self.store.audit(board_id, cursor, limit)
         return AuditPage(board_id=board_id, events=page.events, next_cursor=page.after)
 
-    def _racer_on(self, board_id: str, racer: str) -> str:
+    def _racer_on(self, board_id: str, racer: str) -> tuple[str, str]:
+        """The racer's key and name as they pushed it, when they pushed to the board."""
         key = racer_key(racer)
-        if not self.store.history(key, board_id):
+        submissions = self.store.history(key, board_id)
+        if not submissions:
             raise RacerNotFound(f"{racer!r} has no submissions on {board_id!r}")
-        return key
+        return key, submissions[-1].racer
+
+    def _known_name(self, board_id: str, racer: str) -> str:
+        submissions = self.store.history(racer_key(racer), board_id)
+        return submissions[-1].racer if submissions else racer
 
     def _best_entry(self, board: Board, key: str) -> Entry | None:
         """The racer's best entry, recomputed from their submissions on the board."""

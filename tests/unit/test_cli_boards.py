@@ -585,3 +585,48 @@ def test_import_of_a_missing_file_is_bad_input(other_board: Drboard, tmp_path: P
     result = other_board("import", tmp_path / "missing.jsonl")
     assert result.exit_code == 2
     assert "missing.jsonl" in result.stderr
+
+
+# ---- moderation and audit ----------------------------------------------------------------------
+
+
+def test_an_organiser_removes_bans_and_unbans_a_racer_and_the_audit_says_so(
+        drboard: Drboard, clock: Clock) -> None:
+    create_event(drboard)
+    clock.advance(minutes=1)
+    push_as(drboard, COUNTER_CLOCKWISE[0], racer="Ada")
+    clock.advance(minutes=1)
+    push_as(drboard, COUNTER_CLOCKWISE[1], racer="Bob")
+    clock.advance(minutes=1)
+    assert "Took Ada off event" in drboard.ok("board", "remove-entry", "event", "ada")
+    assert [e["racer"] for e in drboard.json("pull", "--board", "event")["entries"]] == ["Bob"]
+    clock.advance(minutes=1)
+    assert "Banned Bob from event" in drboard.ok("board", "ban", "event", "Bob")
+    assert drboard.json("pull", "--board", "event")["entries"] == []
+    refused = push_as(drboard, COUNTER_CLOCKWISE[2], racer="Bob")
+    assert refused.exit_code == 1 and "'Bob' is banned from 'event'" in refused.stderr
+    clock.advance(minutes=1)
+    assert "Bob may push to event again" in drboard.ok("board", "unban", "event", "bob")
+    assert [e["racer"] for e in drboard.json("pull", "--board", "event")["entries"]] == ["Bob"]
+    trail = drboard.json("audit", "event")
+    assert [(e["action"], e.get("racer")) for e in trail] == [
+        ("create", None), ("push", "Ada"), ("push", "Bob"), ("remove-entry", "Ada"),
+        ("ban", "Bob"), ("unban", "Bob")]
+    assert {e["actor"] for e in trail} == {"local"}
+    table = drboard.ok("audit", "event")
+    assert "remove-entry" in table and "this computer" in table
+
+
+def test_moderating_an_unknown_racer_fails_with_its_name(drboard: Drboard) -> None:
+    create_event(drboard)
+    result = drboard("board", "remove-entry", "event", "Nobody")
+    assert result.exit_code == 1 and "'Nobody' has no submissions on 'event'" in result.stderr
+
+
+def test_the_same_run_under_another_racer_is_refused_as_a_copy(drboard: Drboard) -> None:
+    create_event(drboard)
+    assert push_as(drboard, COUNTER_CLOCKWISE[0], racer="Ada").exit_code == 0
+    copied = push_as(drboard, COUNTER_CLOCKWISE[0], racer="Mallory")
+    assert copied.exit_code == 1
+    assert "already on 'event' under another racer" in copied.stderr
+    assert [e["racer"] for e in drboard.json("pull", "--board", "event")["entries"]] == ["Ada"]
