@@ -87,7 +87,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 9, "the push and the eight organiser routes"
+    assert len(signed) == 15, "the push, /me, /me/alias and the twelve organiser routes"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()
@@ -297,6 +297,8 @@ def test_admin_works_with_its_template_environment_and_permissions(
         ("admin_restore_board.json", 200),
         ("admin_import_board.json", 201), ("admin_import_board.json", 200),
         ("admin_import_submission.json", 201), ("admin_import_submission.json", 200),
+        ("admin_remove_entry.json", 200), ("admin_ban_racer.json", 200),
+        ("admin_unban_racer.json", 200), ("admin_audit.json", 200),
     ]:
         result = _invoke("admin", event_file)
         assert result["statusCode"] == status, (event_file, result["body"][:300])

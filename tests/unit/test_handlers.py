@@ -34,7 +34,8 @@ PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_r
                "pull_view.json", "pull_racer_status.json", "pull_racer_history.json"]
 ADMIN_EVENTS = ["admin_create_board.json", "admin_update_board.json", "admin_close_board.json",
                 "admin_delete_board.json", "admin_restore_board.json", "admin_import_board.json",
-                "admin_import_submission.json", "admin_export_board.json"]
+                "admin_import_submission.json", "admin_export_board.json", "admin_remove_entry.json",
+                "admin_ban_racer.json", "admin_unban_racer.json", "admin_audit.json"]
 REGION = "eu-west-1"
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")

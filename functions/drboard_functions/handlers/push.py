@@ -1,4 +1,5 @@
-"""POST /boards/{board}/submissions: the push function (IAM-authorised in the cloud)."""
+"""POST /boards/{board}/submissions, GET /me, PUT /me/alias: the racer-owned routes
+(signed in the cloud)."""
 
 from __future__ import annotations
 
@@ -24,6 +25,8 @@ SUBMISSION_METRICS = {201: "SubmissionAccepted", 200: "DuplicateSubmission"}
 def count_submissions(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
     """Count accepted and duplicate submissions (refusals answer through the error handlers)."""
     response = next_middleware(app)
+    if app.current_event.http_method != "POST":  # GET /me, PUT /me/alias
+        return response
     name = SUBMISSION_METRICS.get(response.status_code)
     if name:
         metrics.add_metric(name=name, unit=MetricUnit.Count, value=1)
