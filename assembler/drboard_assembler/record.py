@@ -29,8 +29,16 @@ from .aliases import alias_problem
 from .catalog import default_catalog
 
 SCHEMA_VERSION: Literal[1] = 1
-#: Laps faster than the track's length driven at this multiple of the model's top speed are refused.
+#: Laps faster than the track's length driven at this multiple of the top speed are refused.
 PLAUSIBLE_SPEED_FACTOR = 2.0
+#: The top speed a DeepRacer action space can ask for, in m/s: whatever a record claims, no lap
+#: is timed as if the car went faster.
+TOP_SPEED_BOUND_MPS = 4.0
+#: No complete lap is faster than this, on any track, custom tracks included (the shortest
+#: official track, 16.6 m, takes 2.08 s at twice the top speed bound).
+MIN_LAP_MS = 2000
+#: Every other figure a record holds (rewards, hyperparameters) lies within ±this.
+MAX_MAGNITUDE = 1e9
 
 Name = Annotated[
     str,
@@ -51,6 +59,9 @@ def _no_lookalike(alias: str) -> str:
 #: A racer's alias: a Name that cannot pass for another racer's in print.
 Alias = Annotated[Name, AfterValidator(_no_lookalike)]
 Text = Annotated[str, StringConstraints(max_length=limits.MAX_TEXT_CHARS)]
+#: A number a record may hold anywhere: finite (the models refuse NaN and Infinity) and bounded.
+Figure = Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
+Whole = Annotated[int, Field(ge=-int(MAX_MAGNITUDE), le=int(MAX_MAGNITUDE))]
 Sha256 = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
 Count = Annotated[int, Field(ge=0, le=1_000_000)]
 Percent = Annotated[float, Field(ge=0, le=100)]
@@ -73,7 +84,8 @@ class SourceLayout(StrEnum):
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # NaN and Infinity would be stored as JSON null, and every later read of the record fail.
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Lap(Strict):
@@ -140,8 +152,8 @@ class Action(Strict):
 
 
 class Range(Strict):
-    low: float
-    high: float
+    low: Figure
+    high: Figure
 
     @model_validator(mode="after")
     def _ordered(self) -> Self:
@@ -179,26 +191,26 @@ class ActionSpace(Strict):
         return self
 
 
-Scalar = bool | int | float | Annotated[str, StringConstraints(max_length=limits.MAX_NAME_CHARS)]
+Scalar = bool | Whole | Figure | Annotated[str, StringConstraints(max_length=limits.MAX_NAME_CHARS)]
 
 
 class Hyperparameters(Strict):
     """The training hyperparameters; PPO and SAC use different keys, so all are optional."""
 
     batch_size: Annotated[int, Field(gt=0, le=100_000)] | None = None
-    beta_entropy: float | None = None
+    beta_entropy: Figure | None = None
     discount_factor: Annotated[float, Field(ge=0, le=1)] | None = None
-    e_greedy_value: float | None = None
-    epsilon_steps: Annotated[int, Field(ge=0)] | None = None
+    e_greedy_value: Figure | None = None
+    epsilon_steps: Annotated[int, Field(ge=0, le=int(MAX_MAGNITUDE))] | None = None
     exploration_type: Annotated[str, StringConstraints(max_length=32)] | None = None
     loss_type: Literal["huber", "mean_squared_error"] | None = None
     lr: Annotated[float, Field(gt=0, le=1)] | None = None
     num_episodes_between_training: Annotated[int, Field(gt=0, le=100_000)] | None = None
     num_epochs: Annotated[int, Field(gt=0, le=10_000)] | None = None
     stack_size: Annotated[int, Field(gt=0, le=100)] | None = None
-    term_cond_avg_score: float | None = None
-    term_cond_max_episodes: Annotated[int, Field(ge=0)] | None = None
-    sac_alpha: float | None = None
+    term_cond_avg_score: Figure | None = None
+    term_cond_max_episodes: Annotated[int, Field(ge=0, le=int(MAX_MAGNITUDE))] | None = None
+    sac_alpha: Figure | None = None
     other: Annotated[dict[Annotated[str, StringConstraints(max_length=64)], Scalar],
                      Field(max_length=limits.MAX_HYPERPARAMETERS)] = Field(default_factory=dict)
 
@@ -217,16 +229,16 @@ class Design(Strict):
 
 class CurvePoint(Strict):
     episode: Count
-    reward: float
+    reward: Figure
     completion_pct: Percent
 
 
 class TrainingSummary(Strict):
     track: Annotated[str, StringConstraints(max_length=limits.MAX_NAME_CHARS)] | None = None
     episodes: Count
-    training_time_s: Annotated[float, Field(ge=0)]
-    best_reward: float | None
-    mean_reward: float | None
+    training_time_s: Annotated[float, Field(ge=0, le=MAX_MAGNITUDE)]
+    best_reward: Figure | None
+    mean_reward: Figure | None
     best_completion_pct: Percent
     mean_completion_pct: Percent
     completed_laps: Count
@@ -240,7 +252,7 @@ class SourceFile(Strict):
     ]
     path: Text
     sha256: Sha256
-    bytes: Annotated[int, Field(ge=0)]
+    bytes: Annotated[int, Field(ge=0, le=limits.MAX_TRAINING_FILE_BYTES)]
 
 
 class Record(Strict):
@@ -303,20 +315,27 @@ class ImplausibleLap(NamedTuple):
 
 def implausible_lap(track_id: str, max_speed: float,
                     runs: list[EvaluationRun]) -> ImplausibleLap | None:
-    """The first complete lap faster than the track's length driven at PLAUSIBLE_SPEED_FACTOR
-    times the model's top speed (only official tracks have a known length)."""
+    """The first complete lap under MIN_LAP_MS, or faster than the track's length (where it is
+    known) driven at PLAUSIBLE_SPEED_FACTOR times the top speed: the model's, and never more
+    than TOP_SPEED_BOUND_MPS whatever the model claims."""
     track = default_catalog().get(track_id)
-    if track is None:
-        return None
-    fastest_ms = 1000 * track.length_m / (max_speed * PLAUSIBLE_SPEED_FACTOR)
+    speed = min(max_speed, TOP_SPEED_BOUND_MPS)
+    fastest_ms = float(MIN_LAP_MS)
+    if track is not None:
+        fastest_ms = max(fastest_ms, 1000 * track.length_m / (speed * PLAUSIBLE_SPEED_FACTOR))
     for run in runs:
         for index, lap in enumerate(run.laps):
             if lap.complete and lap.time_ms < fastest_ms:
-                return ImplausibleLap(run, index, (
-                    f"lap {lap.trial} time {lap.time_ms} ms is faster than possible: no lap of "
-                    f"{track_id} ({track.length_m} m) takes under {fastest_ms:.0f} ms at the "
-                    f"model's top speed of {max_speed:g} m/s"))
+                return ImplausibleLap(run, index, _too_fast(lap, track_id, track, speed, fastest_ms))
     return None
+
+
+def _too_fast(lap: Lap, track_id: str, track: Any, speed: float, fastest_ms: float) -> str:
+    said = f"lap {lap.trial} time {lap.time_ms} ms is faster than possible: "
+    if track is None or fastest_ms <= MIN_LAP_MS:
+        return said + f"no complete lap takes under {MIN_LAP_MS} ms"
+    return said + (f"no lap of {track_id} ({track.length_m} m) takes under {fastest_ms:.0f} ms at a "
+                   f"top speed of {speed:g} m/s")
 
 
 def content_hash(record: Record) -> str:

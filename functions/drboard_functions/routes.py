@@ -278,7 +278,14 @@ def bounded_json(body: str, bound: RequestBody = RECORD_BODY) -> Any:
     if len(body) > bound.max_bytes or len(body.encode("utf-8")) > bound.max_bytes:
         raise SubmissionTooLarge(
             f"the request body is over {bound.max_bytes} bytes, the bound of {bound.what}")
-    return json.loads(body)
+    try:
+        return json.loads(body)
+    except json.JSONDecodeError:
+        raise  # Powertools answers it as a body that is not JSON, with where parsing stopped
+    except (ValueError, RecursionError) as error:  # a number over 4,300 digits; too deep a nesting
+        reason = "nested too deeply" if isinstance(error, RecursionError) else str(error).split(":")[0]
+        raise bound.invalid(f"{bound.what} cannot be read: {reason}",
+                            detail=[{"loc": bound.name, "msg": reason, "type": "value_error"}]) from None
 
 
 def _check_record_size(record: Record) -> None:

@@ -118,10 +118,16 @@ def racer_key(racer: str) -> str:
     return alias_key(racer)
 
 
+#: A custom track's default boards are ``custom.<track>...``: a push for a track of one's own
+#: can take neither an official track's board id nor a named board's (which may not start so).
+CUSTOM_PREFIX = "custom."
+
+
 def default_board_id(track: str, direction: str | None, race_type: RaceType) -> str:
     """A track's default board: counter-clockwise and unspecified runs share the track's board;
     clockwise runs, and race types other than time trial, rank on boards of their own."""
-    return track + ("_cw" if direction == "cw" else "") + _RACE_SUFFIX[race_type]
+    prefix = "" if default_catalog().is_official(track) else CUSTOM_PREFIX
+    return prefix + track + ("_cw" if direction == "cw" else "") + _RACE_SUFFIX[race_type]
 
 
 def board_for_track(name: str, race_type: RaceType = RaceType.TIME_TRIAL,
@@ -415,7 +421,7 @@ class LeaderboardService:
         now = self.clock()
         track, direction = _spec_track(spec)
         if is_default_board_id(spec.board_id) or spec.board_id == default_board_id(
-                track, direction, spec.race_type):
+                track, direction, spec.race_type) or spec.board_id.startswith(CUSTOM_PREFIX):
             raise BoardExists(f"{spec.board_id!r} is a track's default board id; "
                               "give a named board an id of its own")
         board = _valid_board(

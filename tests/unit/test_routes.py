@@ -457,7 +457,7 @@ def test_the_index_lists_the_boards_and_escapes_custom_track_names(client: Clien
     assert '<a href="/boards/reInvent2019_track/view">Smile Speedway</a>' in page
     assert "<b>" not in page
     assert "&lt;b&gt;My track&lt;/b&gt;" in page
-    assert 'href="/boards/%3Cb%3EMy%20track%3C%2Fb%3E/view"' in page
+    assert 'href="/boards/custom.%3Cb%3EMy%20track%3C%2Fb%3E/view"' in page
 
 
 def test_the_index_of_an_empty_board_says_how_to_start(client: Client) -> None:

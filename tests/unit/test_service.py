@@ -308,7 +308,7 @@ def test_a_push_to_an_unknown_board_is_board_not_found(service: LeaderboardServi
 
 def test_a_custom_track_gets_its_own_board(service: LeaderboardService) -> None:
     receipt = service.push(make_record("Ada", track="garage_loop"))
-    assert receipt.board_id == "garage_loop"
+    assert receipt.board_id == "custom.garage_loop"
     view = service.boards()[0]
     assert (view.track, view.track_name, view.title) == ("garage_loop", "garage_loop", "garage_loop")
 
