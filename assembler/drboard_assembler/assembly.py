@@ -121,12 +121,18 @@ def _assemble_folder(root: Path, overrides: Overrides, default_model: str,
                             "no evaluation metrics file found (metrics/evaluation/*.json or "
                             "metrics/EvaluationMetrics-*.json)")
     runs: list[tuple[EvaluationRun, RunParams | None]] = []
+    # Parameters that name only metrics files the folder does not hold describe another run.
+    named_files = {p.metrics_file for p in evaluation_params if p.metrics_file}
+    foreign = bool(named_files) and not named_files & {p.name for p in files.evaluation_metrics}
     for path in files.evaluation_metrics:
         run = load_evaluation(
             reader.read(path, "evaluation_metrics", limits.MAX_EVALUATION_FILE_BYTES),
             files.name(path),
         )
-        runs.append((run, _params_for(path.name, evaluation_params)))
+        named = _params_for(path.name, evaluation_params)
+        if named is not None or foreign:
+            run = run.model_copy(update={"named_by_params": named is not None})
+        runs.append((run, named))
 
     track = _choose_track(runs, evaluation_params, overrides, where)
     kept = [(run, p) for run, p in runs if p is None or _names_track(p, track)]

@@ -29,6 +29,10 @@ class _EvaluationEntry(_Entry):
     off_track_count: NonNegative = 0
     crash_count: NonNegative = 0
     reset_count: NonNegative = 0
+    immobilized_count: NonNegative | None = None
+    reversed_count: NonNegative | None = None
+    start_time: Annotated[float, Field(ge=0, le=1e14, allow_inf_nan=False)] | None = None
+    metric_time: Annotated[float, Field(ge=0, le=1e14, allow_inf_nan=False)] | None = None
 
 
 @dataclass(slots=True, config=ConfigDict(extra="ignore"))
@@ -71,6 +75,10 @@ def load_evaluation(data: bytes, name: str) -> EvaluationRun:
             off_track=entry.off_track_count,
             crashes=entry.crash_count,
             resets=entry.reset_count,
+            started_ms=entry.start_time,
+            ended_ms=entry.metric_time,
+            immobilized=entry.immobilized_count,
+            reversed=entry.reversed_count,
         )
         for number, entry in enumerate(entries, start=1)
     ]

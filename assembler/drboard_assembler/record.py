@@ -62,6 +62,8 @@ Text = Annotated[str, StringConstraints(max_length=limits.MAX_TEXT_CHARS)]
 #: A number a record may hold anywhere: finite (the models refuse NaN and Infinity) and bounded.
 Figure = Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
 Whole = Annotated[int, Field(ge=-int(MAX_MAGNITUDE), le=int(MAX_MAGNITUDE))]
+#: A simulation timestamp in milliseconds (from its start, or since 1970).
+Moment = Annotated[float, Field(ge=0, le=1e14)]
 Sha256 = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
 Count = Annotated[int, Field(ge=0, le=1_000_000)]
 Percent = Annotated[float, Field(ge=0, le=100)]
@@ -96,6 +98,13 @@ class Lap(Strict):
     off_track: Count = 0
     crashes: Count = 0
     resets: Count = 0
+    # What the metrics file says besides (None where it does not): when the lap started and
+    # ended, in the simulation's milliseconds, and the resets' other two causes. The board
+    # checks each lap's time and reset count against them.
+    started_ms: Moment | None = None
+    ended_ms: Moment | None = None
+    immobilized: Count | None = None
+    reversed: Count | None = None
 
     @property
     def complete(self) -> bool:
@@ -115,6 +124,9 @@ class EvaluationRun(Strict):
     best_completion_pct: Percent
     off_track_total: Count
     resets_total: Count
+    #: Whether evaluation parameters in the run folder name this metrics file (None: the
+    #: folder held no evaluation parameters).
+    named_by_params: bool | None = None
 
     @classmethod
     def from_laps(cls, source: str, laps: list[Lap]) -> "EvaluationRun":
@@ -338,10 +350,26 @@ def _too_fast(lap: Lap, track_id: str, track: Any, speed: float, fastest_ms: flo
                    f"top speed of {speed:g} m/s")
 
 
+#: Fields added to the record after its first version: left out of its content hash while they
+#: are empty, so that records stored before them keep their submission id.
+_LATER_LAP_FIELDS = ("started_ms", "ended_ms", "immobilized", "reversed")
+_LATER_RUN_FIELDS = ("named_by_params",)
+
+
 def content_hash(record: Record) -> str:
     content = record.model_dump(mode="json", exclude={"submission_id", "assembler_version"})
+    for run in content["evaluations"]:
+        _drop_empty(run, _LATER_RUN_FIELDS)
+        for lap in run["laps"]:
+            _drop_empty(lap, _LATER_LAP_FIELDS)
     canonical = json.dumps(content, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
     return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def _drop_empty(fields: dict[str, Any], names: tuple[str, ...]) -> None:
+    for name in names:
+        if fields.get(name) is None:
+            fields.pop(name, None)
 
 
 def record_json_schema() -> dict[str, Any]:

@@ -442,6 +442,9 @@ def _setting_options(update: bool) -> Callable[[Callable[..., Any]], Callable[..
                           "seconds." + clear),
         click.option("--max-submissions", type=board_options.Count(clearable=update), metavar="N",
                      help="The most submissions a racer may make." + clear),
+        click.option("--flagged-runs", type=click.Choice(["rank", "unranked"]),
+                     help="Whether runs the board's consistency checks flag still rank, or only "
+                          "show below the qualified racers" + ("." if update else " (default: rank).")),
     ]
 
     def decorate(command: Callable[..., Any]) -> Callable[..., Any]:

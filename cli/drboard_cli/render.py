@@ -21,6 +21,7 @@ from drboard_functions.display import (
     seconds,
     when,
 )
+from drboard_functions.flags import DESCRIPTIONS
 from drboard_functions.models import (
     AuditEvent,
     BoardPage,
@@ -43,9 +44,13 @@ from rich.text import Text
 
 from .transfer import ExportCounts, ImportSummary
 
+#: Beside a run the board's consistency checks flagged (`drboard show` says which checks).
+FLAG_MARK = "⚑"
+
 
 def _time_label(entry: EntryView) -> str:
-    return seconds(entry.time_ms) if entry.qualified else f"{percent(entry.best_completion_pct)} done"
+    label = seconds(entry.time_ms) if entry.qualified else f"{percent(entry.best_completion_pct)} done"
+    return f"{label} {FLAG_MARK}" if entry.flags else label
 
 
 # ---- boards ----------------------------------------------------------------------------------
@@ -55,11 +60,10 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     """The standings; on a narrow terminal the submission time and model name give way."""
     board = page.board
     wide = width >= 110
-    table = Table(
-        title=f"{board.title} · {board.board_id}",
-        caption=f"{board.participants} racers · {method_label(board)}",
-        header_style="bold",
-    )
+    caption = f"{board.participants} racers · {method_label(board)}"
+    if any(entry.flags for entry in page.entries):
+        caption += f" · {FLAG_MARK} flagged by the board's checks"
+    table = Table(title=f"{board.title} · {board.board_id}", caption=caption, header_style="bold")
     table.add_column("Rank", justify="right")
     table.add_column("Racer", overflow="fold")
     if wide:
@@ -135,6 +139,8 @@ def board_panel(board: BoardView) -> Panel:
     grid.add_row("Status", _status_label(board))
     grid.add_row("Track", Text(f"{_track_label(board)} ({board.track})"))
     grid.add_row("Timing", method_label(board))
+    grid.add_row("Flagged runs", "rank" if board.flagged_runs == "rank"
+                 else "shown below the qualified racers, unranked")
     grid.add_row("Opens", when(board.opens_at) if board.opens_at else "when created")
     grid.add_row("Closes", when(board.closes_at) if board.closes_at else "never")
     cooldown = f"{duration(board.cooldown_s)} between a racer's submissions" if board.cooldown_s else "none"
@@ -365,6 +371,8 @@ def racer_panel(view: RacerView) -> Group:
         summary.add_row("Training", f"{t.episodes} episodes on {t.track or DASH}, "
                         f"{t.training_time_s / 3600:.1f} h, best reward {t.best_reward}, "
                         f"{t.completed_laps} laps completed")
+    if entry.flags:
+        summary.add_row(f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
     return Group(summary, hyperparameter_table(record), action_space_table(record),
                  laps_table(record))
 

@@ -47,6 +47,9 @@ DEFAULT_MIN_LAPS = {
 }
 
 
+FlaggedRuns = Literal["rank", "unranked"]
+
+
 class Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -56,6 +59,9 @@ class BoardRules(Model):
 
     method: TimingMethod = TimingMethod.BEST_LAP_TIME
     min_laps: Annotated[int, Field(ge=1, le=100)] = 1
+    #: Whether a run the board's consistency checks flag still ranks, or only shows below the
+    #: qualified racers.
+    flagged_runs: FlaggedRuns = "rank"
 
     @model_validator(mode="before")
     @classmethod
@@ -151,6 +157,7 @@ class Score(Model):
     laps_completed: int
     best_lap_ms: int | None
     run: str  # the evaluation run that scored
+    flags: list[str] = []  # the scoring run's consistency flags (see flags.py)
 
 
 class Design(Model):
@@ -269,6 +276,7 @@ class EntryView(Model):
     submitted_at: datetime
     submission_id: str
     design: Design
+    flags: list[str] = []
 
 
 class BoardView(Model):
@@ -282,6 +290,7 @@ class BoardView(Model):
     race_type: RaceType
     method: TimingMethod
     min_laps: int
+    flagged_runs: FlaggedRuns = "rank"
     status: BoardStatus
     opens_at: datetime | None
     closes_at: datetime | None
@@ -307,6 +316,7 @@ class HistoryItem(Model):
     laps_completed: int
     best_completion_pct: float
     is_best: bool
+    flags: list[str] = []
 
 
 class RacerView(Model):
@@ -366,6 +376,7 @@ class BoardSpec(Model):
     race_type: RaceType = RaceType.TIME_TRIAL
     method: TimingMethod = TimingMethod.BEST_LAP_TIME
     min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
+    flagged_runs: FlaggedRuns = "rank"
     opens_at: Moment | None = None
     closes_at: Moment | None = None
     cooldown_s: CooldownSeconds = 0
@@ -380,6 +391,7 @@ class BoardChanges(Model):
     description: Description | None = None
     method: TimingMethod | None = None
     min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
+    flagged_runs: FlaggedRuns | None = None
     opens_at: Moment | None = None
     closes_at: Moment | None = None
     cooldown_s: CooldownSeconds | None = None

@@ -12,6 +12,7 @@ from datetime import UTC, datetime
 
 from drboard_assembler.record import EvaluationRun, Record
 
+from .flags import run_flags
 from .models import BoardRules, Score, TimingMethod
 
 _TIME_DIGITS = 12
@@ -49,8 +50,13 @@ TIMING: dict[TimingMethod, Callable[[EvaluationRun, int], int | None]] = {
 }
 
 
-def score_run(run: EvaluationRun, rules: BoardRules) -> Score:
+def score_run(run: EvaluationRun, rules: BoardRules, flags: list[str] | None = None) -> Score:
+    """How the run places; a flagged run on a board whose flagged runs do not rank does not
+    qualify (it shows below every qualified racer, by completion)."""
+    flags = flags or []
     time_ms = TIMING[rules.method](run, rules.min_laps)
+    if flags and rules.flagged_runs == "unranked":
+        time_ms = None
     return Score(
         qualified=time_ms is not None,
         time_ms=time_ms,
@@ -58,12 +64,15 @@ def score_run(run: EvaluationRun, rules: BoardRules) -> Score:
         laps_completed=run.laps_completed,
         best_lap_ms=run.best_lap_ms,
         run=run.source,
+        flags=flags,
     )
 
 
 def score_record(record: Record, rules: BoardRules) -> Score:
     """The record's best evaluation run under the board's rules."""
-    return min((score_run(run, rules) for run in record.evaluations), key=score_key)
+    speed = record.design.action_space.max_speed
+    return min((score_run(run, rules, list(run_flags(run, record.track, speed)))
+                for run in record.evaluations), key=score_key)
 
 
 def score_key(score: Score) -> str:

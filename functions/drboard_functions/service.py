@@ -427,7 +427,8 @@ class LeaderboardService:
         board = _valid_board(
             board_id=spec.board_id, kind="named", track=track, direction=direction,
             race_type=spec.race_type, title=spec.title, description=spec.description,
-            rules={"method": spec.method, "min_laps": spec.min_laps},
+            rules={"method": spec.method, "min_laps": spec.min_laps,
+                   "flagged_runs": spec.flagged_runs},
             opens_at=spec.opens_at, closes_at=spec.closes_at, cooldown_s=spec.cooldown_s,
             max_submissions=spec.max_submissions, created_at=now,
         )
@@ -449,11 +450,13 @@ class LeaderboardService:
                 raise InvalidQuery(f"{name} cannot be cleared")
         cleared = {"description": "", "cooldown_s": 0}  # what null means for the unbounded ones
         updates = {name: cleared.get(name) if getattr(changes, name) is None else getattr(changes, name)
-                   for name in given if name not in ("method", "min_laps")}
+                   for name in given if name not in ("method", "min_laps", "flagged_runs")}
         method = changes.method if "method" in given and changes.method else board.rules.method
         min_laps = changes.min_laps if "min_laps" in given else (
             None if method != board.rules.method else board.rules.min_laps)
-        rules = BoardRules.model_validate({"method": method, "min_laps": min_laps})
+        flagged_runs = changes.flagged_runs or board.rules.flagged_runs
+        rules = BoardRules.model_validate({"method": method, "min_laps": min_laps,
+                                           "flagged_runs": flagged_runs})
         rescores = rules != board.rules
         updated = _valid_board(**(board.model_dump() | updates | {"rules": rules.model_dump()}))
         if rescores and stored.participants:
@@ -651,7 +654,8 @@ class LeaderboardService:
                              board_id=board_id, submission_id=record.submission_id)
 
 
-_LOCKED = ("{!r} has entries: its track, timing method and minimum laps can no longer change "
+_LOCKED = ("{!r} has entries: its track, timing method, minimum laps and flagged-run rule can no "
+           "longer change "
            "(create a new board, or export it and import into one with the new rules)")
 EXPORT_ENTRIES = 500
 EXPORT_SUBMISSIONS = 25  # with their records, up to 64 KiB each: a page stays under 2 MB
@@ -826,6 +830,7 @@ def _board_view(stored: StoredBoard, now: datetime) -> BoardView:
         race_type=board.race_type,
         method=board.rules.method,
         min_laps=board.rules.min_laps,
+        flagged_runs=board.rules.flagged_runs,
         status=board.status(now),
         opens_at=board.opens_at,
         closes_at=board.closes_at,
@@ -852,6 +857,7 @@ def _entry_view(entry: Entry, rank: int, leader: Entry | None) -> EntryView:
         submitted_at=entry.achieved_at,
         submission_id=entry.submission_id,
         design=entry.design,
+        flags=entry.score.flags,
     )
 
 
@@ -867,6 +873,7 @@ def _history_item(submission: Submission, best: Entry | None) -> HistoryItem:
         laps_completed=submission.score.laps_completed,
         best_completion_pct=submission.score.best_completion_pct,
         is_best=best is not None and best.submission_id == submission.submission_id,
+        flags=submission.score.flags,
     )
 
 

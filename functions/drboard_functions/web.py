@@ -13,6 +13,7 @@ from urllib.parse import quote, urlencode
 
 from .display import DASH, gap, method_label, percent, seconds
 from .display import design_summary as _design_summary
+from .flags import DESCRIPTIONS
 from .models import BoardPage, BoardView, Design, EntryView
 
 REFRESH_S = 30
@@ -99,7 +100,7 @@ def _entry_row(entry: EntryView) -> str:
         f"{row}"
         f'<td class="num rank">{entry.rank}</td>'
         f'<td>{escape(entry.racer)}<br><span class="model">{escape(entry.model_name)}</span></td>'
-        f'<td class="num">{escape(time)}</td>'
+        f'<td class="num">{escape(time)}{_flag_mark(entry.flags)}</td>'
         f'<td class="num">{escape(gap(entry.gap_ms) if entry.qualified else DASH)}</td>'
         f'<td class="num">{escape(seconds(entry.best_lap_ms))}</td>'
         f'<td class="num">{entry.laps_completed}</td>'
@@ -119,3 +120,11 @@ def _document(title: str, heading: str, subtitle: str, body: str, refresh: bool 
         "<footer>drboard, a collaborative leaderboard for AWS DeepRacer racers</footer>"
         "</main></body></html>"
     )
+
+
+def _flag_mark(flags: list[str]) -> str:
+    """A mark beside a flagged run, its title saying which checks flagged it."""
+    if not flags:
+        return ""
+    said = "; ".join(DESCRIPTIONS.get(flag, flag) for flag in flags)
+    return f' <span class="flag" title="{escape(said)}" aria-label="flagged: {escape(said)}">⚑</span>'

@@ -1,0 +1,68 @@
+"""Consistency checks the board runs on every record, shown beside the runs they concern.
+
+A flag is not a refusal: real runs can be odd. Each says which figures of a run disagree, and a
+board's ``flagged_runs`` rule decides whether a flagged run still ranks (``rank``, the default)
+or only shows, below every qualified racer (``unranked``).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from drboard_assembler.catalog import default_catalog
+from drboard_assembler.record import TOP_SPEED_BOUND_MPS, EvaluationRun, Lap, Record
+
+Flag = Literal["lap-timestamps", "reset-count", "params-name-another-file", "faster-than-top-speed"]
+
+DESCRIPTIONS: dict[str, str] = {
+    "lap-timestamps": "a lap's time disagrees with its start and end timestamps",
+    "reset-count": "a lap's reset count is not the sum of its crashes, off-tracks, "
+                   "immobilisations and reversals",
+    "params-name-another-file": "the run folder's evaluation parameters name a metrics file it "
+                                "does not hold",
+    "faster-than-top-speed": "a lap is faster than the track's length at the model's top speed",
+}
+
+#: How far a lap's time may stray from its end minus its start (the simulator rounds both).
+TIMESTAMP_TOLERANCE_MS = 50
+
+
+def run_flags(run: EvaluationRun, track: str, max_speed: float) -> list[Flag]:
+    """The flags of one evaluation run, in a fixed order."""
+    flags: list[Flag] = []
+    if any(_timestamps_disagree(lap) for lap in run.laps):
+        flags.append("lap-timestamps")
+    if any(_resets_disagree(lap) for lap in run.laps):
+        flags.append("reset-count")
+    if run.named_by_params is False:
+        flags.append("params-name-another-file")
+    fastest_ms = _fastest_ms(track, max_speed)
+    if fastest_ms is not None and any(lap.complete and lap.time_ms < fastest_ms for lap in run.laps):
+        flags.append("faster-than-top-speed")
+    return flags
+
+
+def record_flags(record: Record) -> dict[str, list[Flag]]:
+    """Each flagged evaluation run's flags, by its source."""
+    speed = record.design.action_space.max_speed
+    flagged = {run.source: run_flags(run, record.track, speed) for run in record.evaluations}
+    return {source: flags for source, flags in flagged.items() if flags}
+
+
+def _timestamps_disagree(lap: Lap) -> bool:
+    if lap.started_ms is None or lap.ended_ms is None:
+        return False
+    return abs((lap.ended_ms - lap.started_ms) - lap.time_ms) > TIMESTAMP_TOLERANCE_MS
+
+
+def _resets_disagree(lap: Lap) -> bool:
+    if lap.immobilized is None or lap.reversed is None:
+        return False  # an older metrics file: not every cause is counted
+    return lap.resets != lap.crashes + lap.off_track + lap.immobilized + lap.reversed
+
+
+def _fastest_ms(track_id: str, max_speed: float) -> float | None:
+    track = default_catalog().get(track_id)
+    if track is None:
+        return None
+    return 1000 * track.length_m / min(max_speed, TOP_SPEED_BOUND_MPS)
