@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 import pytest
+from drboard_cli import tokens
 from drboard_cli.remote import HttpBoard
 from drboard_cli.serve import BoardServer, http_event
 from drboard_functions import errors
@@ -283,7 +284,16 @@ def test_organiser_routes_answer_only_the_serving_computer(tmp_path: Path) -> No
             from_the_lan.export_page("club-night", None)
         with pytest.raises(errors.NotAuthorized):
             from_the_lan.delete_board("club-night")
+        with pytest.raises(errors.NotSignedIn):
+            from_the_lan.push(make_record("Ada"), "club-night")
+        assert served.process.stdout is not None
+        code = re.search(r"join with code (\S+)", served.process.stdout.readline())
+        assert code, "serve prints the join code"
+        joined = from_the_lan.join(code.group(1))
+        tokens.save(from_the_lan.endpoint, tokens.SavedToken(kind="join", access_token=joined.token))
         assert from_the_lan.push(make_record("Ada"), "club-night").status == "created"  # racers may
+        with pytest.raises(errors.AliasTaken):
+            from_the_lan.push(make_record("Bob"), "club-night")
         assert [b.board_id for b in from_the_lan.boards()] == ["club-night"]
     finally:
         served.stop()

@@ -630,3 +630,12 @@ def test_the_same_run_under_another_racer_is_refused_as_a_copy(drboard: Drboard)
     assert copied.exit_code == 1
     assert "already on 'event' under another racer" in copied.stderr
     assert [e["racer"] for e in drboard.json("pull", "--board", "event")["entries"]] == ["Ada"]
+
+
+def test_a_board_can_keep_flagged_runs_off_the_ranking(drboard: Drboard) -> None:
+    out = drboard.ok("board", "create", "strict", "--title", "Strict", "--track", "reInvent2019",
+                     "--flagged-runs", "unranked")
+    assert "shown below the qualified racers, unranked" in out
+    assert drboard.boards()["strict"]["flagged_runs"] == "unranked"
+    relaxed = drboard.ok("board", "update", "strict", "--flagged-runs", "rank")
+    assert "Flagged runs" in relaxed and "unranked" not in relaxed
