@@ -758,6 +758,71 @@ def _reachable(host: str) -> str:
             return socket.gethostname()
 
 
+def _endpoint(ctx: Context, command: str) -> str:
+    if not ctx.endpoint:
+        raise click.UsageError(f"give the board: drboard --endpoint URL {command} (or save it "
+                               "with `drboard configure`)")
+    return str(ctx.endpoint).rstrip("/")
+
+
+@cli.command()
+@click.option("--password", "use_password", is_flag=True,
+              help="Sign in with your user name and password here, with no browser.")
+@click.option("--username", help="With --password: your user name (asked for otherwise).")
+@click.option("--no-browser", is_flag=True,
+              help="Print the sign-in page's address instead of opening a browser.")
+@pass_context
+def login(ctx: Context, use_password: bool, username: str | None, no_browser: bool) -> None:
+    """Sign in to a deployed board, as a racer or an organiser.
+
+    Opens the board's sign-in page in your browser and waits for it to send you back (to
+    http://localhost:8765/callback). With --password, asks for your user name and password here
+    instead (an invited racer's temporary password is replaced by a new one). The token is saved
+    for that board in your user config folder, readable by you only, and renewed before it
+    expires; `drboard logout` forgets it.
+    """
+    from . import login as signing_in
+
+    with edge():
+        endpoint = _endpoint(ctx, "login")
+        settings = signing_in.sign_in_settings(endpoint)
+        if use_password:
+            name = username or click.prompt("User name")
+            password = click.prompt("Password", hide_input=True)
+            token = signing_in.login_with_password(
+                endpoint, settings, name, password,
+                new_password=lambda: click.prompt("Choose a new password", hide_input=True,
+                                                  confirmation_prompt=True))
+        else:
+            def show(url: str) -> None:
+                err.print(f"Sign in at: {url}" if no_browser else
+                          f"Opening your browser to sign in (or open {url})", soft_wrap=True)
+
+            token = signing_in.login_in_browser(endpoint, settings, show, open_browser=not no_browser)
+        out.print(f"Signed in to {endpoint} as {token.username or 'you'}.", soft_wrap=True)
+
+
+@cli.command()
+@pass_context
+def logout(ctx: Context) -> None:
+    """Forget your sign-in to the board (and revoke it, on a deployed board)."""
+    from . import login as signing_in
+
+    with edge():
+        endpoint = _endpoint(ctx, "logout")
+        forgot = signing_in.logout(endpoint)
+        out.print(f"Signed out of {endpoint}." if forgot else f"You were not signed in to {endpoint}.",
+                  soft_wrap=True)
+
+
+@cli.command()
+@pass_context
+def whoami(ctx: Context) -> None:
+    """Who the board takes you for: your sign-in, whether you organise, and your racer alias."""
+    with edge():
+        out.print(render.me_line(ctx.board.me()), soft_wrap=True)
+
+
 @cli.command()
 @click.argument("code")
 @pass_context
@@ -770,9 +835,7 @@ def join(ctx: Context, code: str) -> None:
     from .remote import HttpBoard
 
     with edge():
-        if not ctx.endpoint:
-            raise click.UsageError("give the board: drboard --endpoint http://HOST:PORT join CODE")
-        board = HttpBoard(str(ctx.endpoint))
+        board = HttpBoard(_endpoint(ctx, "join CODE"))
         joined = board.join(code)
         tokens.save(board.endpoint, tokens.SavedToken(kind="join", access_token=joined.token,
                                                       username=joined.principal))

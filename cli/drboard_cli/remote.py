@@ -1,9 +1,10 @@
 """A deployed board (or `drboard serve`) over HTTP: the same calls as the in-process board.
 
 Every ``BoardClient`` call maps to one route (see the README's HTTP API). Pushes and every
-organiser call carry the sign-in token saved for the endpoint (:mod:`drboard_cli.tokens`) or, with
-none, are signed with SigV4 using the caller's AWS credentials when there are any; reads are
-public.
+organiser call carry the sign-in token saved for the endpoint (:mod:`drboard_cli.tokens`; a
+Cognito one goes to the same route under ``/cognito``, renewed first when it is about to expire)
+or, with none, are signed with SigV4 using the caller's AWS credentials when there are any; reads
+are public.
 An error answer becomes the domain error the board named in its ``error`` field, so a refusal
 reads the same as on the in-process board; an answer without one (API Gateway's own, e.g. 403
 for an unsigned request) is mapped by its status.
@@ -45,6 +46,7 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from . import tokens
 from .joins import Joined, JoinRequest
+from .login import fresh_token
 
 T = TypeVar("T", bound=BaseModel)
 
@@ -165,12 +167,13 @@ class HttpBoard:
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: dict[str, str | None] | None = None, signed: bool = False) -> Answer:
         given = {name: value for name, value in (query or {}).items() if value}
-        url = self.endpoint + path + (f"?{urllib.parse.urlencode(given)}" if given else "")
+        token = fresh_token(self.endpoint) if signed else None
+        prefix = tokens.route_prefix(token) if token else ""
+        url = self.endpoint + prefix + path + (f"?{urllib.parse.urlencode(given)}" if given else "")
         data = body.model_dump_json().encode("utf-8") if isinstance(body, BaseModel) else body
         headers = {"Accept": "application/json"}
         if data is not None:
             headers["Content-Type"] = "application/json"
-        token = tokens.bearer(self.endpoint) if signed else None
         if token:
             headers["Authorization"] = f"Bearer {token}"
         elif signed:

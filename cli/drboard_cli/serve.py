@@ -137,6 +137,9 @@ class BoardServer(ThreadingHTTPServer):
         self.lock = threading.Lock()
 
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
+        from drboard_functions.routes import canonical_event
+
+        event = canonical_event(event)
         http = event["requestContext"]["http"]
         local = is_loopback(http["sourceIp"])
         if http["method"] == "POST" and event["rawPath"] == "/join":

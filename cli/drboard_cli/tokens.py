@@ -94,10 +94,13 @@ def forget(endpoint: str) -> bool:
     return True
 
 
-def bearer(endpoint: str) -> str | None:
-    """The access token to send to this endpoint: ``DRBOARD_TOKEN``, else the saved one."""
-    given = os.environ.get(ENV_TOKEN)
-    if given:
-        return given.strip()
-    saved = load(endpoint)
-    return saved.access_token if saved else None
+def from_environment() -> str | None:
+    """``DRBOARD_TOKEN``, when it is set."""
+    given = os.environ.get(ENV_TOKEN, "").strip()
+    return given or None
+
+
+def route_prefix(token: str) -> str:
+    """Where a token's requests go: a Cognito access token (a JWT) to the deployed board's
+    ``/cognito`` routes, a join token to the board's own."""
+    return "/cognito" if token.count(".") == 2 else ""

@@ -79,7 +79,7 @@ from .errors import (
     SubmissionTooLarge,
     TooSoon,
 )
-from .identity import Caller, caller_from_event
+from .identity import Caller, SignIn, caller_from_event
 from .models import (
     MAX_PAGE,
     AliasRequest,
@@ -225,6 +225,33 @@ def current_organiser(request: Request) -> Caller:
 
 
 Organiser = Annotated[Caller, Depends(current_organiser)]
+
+
+#: The routes a Cognito sign-in reaches in the cloud: the same routes under this prefix, behind
+#: the HTTP API's JWT authorizer (an API Gateway route has one authorizer; the unprefixed ones
+#: keep IAM, for organisers' own scripts). The functions and `drboard serve` strip it.
+COGNITO_PREFIX = "/cognito"
+
+
+def canonical_event(event: dict[str, Any]) -> dict[str, Any]:
+    """The event as the routes know it: a ``/cognito/...`` path without its prefix."""
+    path = str(event.get("rawPath") or "")
+    if not path.startswith(COGNITO_PREFIX + "/"):
+        return event
+    event = dict(event)
+    event["rawPath"] = path[len(COGNITO_PREFIX):]
+    context = dict(event.get("requestContext") or {})
+    http = dict(context.get("http") or {})
+    if str(http.get("path", "")).startswith(COGNITO_PREFIX + "/"):
+        http["path"] = http["path"][len(COGNITO_PREFIX):]
+    context["http"] = http
+    event["requestContext"] = context
+    return event
+
+
+def current_sign_in(request: Request) -> SignIn:
+    sign_in = request.context.get("sign_in")
+    return sign_in if isinstance(sign_in, SignIn) else SignIn()
 
 
 def _segment(value: str) -> str:
@@ -455,6 +482,20 @@ def get_racer_status(racer: RacerAlias, service: Service, board: OnBoard = None)
 def get_racer_history(racer: RacerAlias, service: Service, board: OnBoard = None) -> RacerHistory:
     alias = _segment(racer)
     return RacerHistory(racer=alias, history=service.history(alias, board))
+
+
+@pull_router.get(
+    "/.well-known/drboard.json",
+    summary="How to sign in to this board",
+    description="What `drboard login --endpoint URL` needs: `kind` is `cognito` (a deployed "
+                "board: its user pool, public app client, hosted sign-in domain and scopes; "
+                "signed-in requests go to the same routes under `/cognito`), `join-code` (a "
+                "`drboard serve` board: `POST /join` with the organiser's code) or `none`.",
+    tags=["racers"],
+    responses={200: _json_response("How racers sign in.", SignIn)},
+)
+def well_known(sign_in: Annotated[SignIn, Depends(current_sign_in)]) -> SignIn:
+    return sign_in
 
 
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],

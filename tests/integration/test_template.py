@@ -24,6 +24,8 @@ from samtranslator.yaml_helper import yaml_parse
 
 from tests.tablekit import create_board_table
 
+COGNITO_PREFIX = "/cognito"
+
 ROOT = Path(__file__).parents[2]
 EVENTS = ROOT / "events"
 FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull", "AdminFunction": "admin"}
@@ -60,10 +62,18 @@ def _app_routes(kind: str) -> set[tuple[str, str]]:
     return set(_app_operations(kind))
 
 
-def _template_routes(sam: dict[str, Any], function: str) -> set[tuple[str, str]]:
+def _template_events(sam: dict[str, Any], function: str) -> list[tuple[str, str, str | None]]:
+    """(METHOD, path, authorizer) of each of the function's HTTP API events."""
     events = sam["Resources"][function]["Properties"]["Events"].values()
-    return {(e["Properties"]["Method"].upper(), e["Properties"]["Path"])
-            for e in events if e["Type"] == "HttpApi"}
+    return [(e["Properties"]["Method"].upper(), e["Properties"]["Path"],
+             (e["Properties"].get("Auth") or {}).get("Authorizer"))
+            for e in events if e["Type"] == "HttpApi"]
+
+
+def _template_routes(sam: dict[str, Any], function: str) -> set[tuple[str, str]]:
+    """The routes the function serves, as its resolver knows them (``/cognito`` stripped)."""
+    return {(method, path.removeprefix(COGNITO_PREFIX))
+            for method, path, _ in _template_events(sam, function)}
 
 
 @pytest.mark.parametrize("function", FUNCTIONS)
@@ -76,7 +86,9 @@ def test_every_route_of_the_code_has_one_function_in_the_template(sam: dict[str,
 
     documented = {(method.upper(), path) for path, methods in json.loads(openapi_document())["paths"].items()
                   for method in methods}
-    served = [route for function in FUNCTIONS for route in _template_routes(sam, function)]
+    served = [(method, path) for function in FUNCTIONS
+              for method, path, _ in _template_events(sam, function)
+              if not path.startswith(COGNITO_PREFIX + "/")]
     assert sorted(served) == sorted(documented), "each route once, by the function that has it"
     functions = [name for name, r in sam["Resources"].items() if r["Type"] == "AWS::Serverless::Function"]
     assert sorted(functions) == sorted(FUNCTIONS)
@@ -97,11 +109,37 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
                 continue
             seen.add((method.upper(), path))
             auth = operation.get("security") or operation.get("x-amazon-apigateway-auth")
-            if (method.upper(), path) in signed:
+            if path.startswith(COGNITO_PREFIX + "/"):
+                assert (method.upper(), path.removeprefix(COGNITO_PREFIX)) in signed, (method, path)
+                assert auth == [{"RacerSignIn": []}], (method, path, auth)
+            elif (method.upper(), path) in signed:
                 assert auth == {"type": "AWS_IAM"} or auth == [{"AWS_IAM": []}], (method, path, auth)
             else:
                 assert not auth, (method, path, auth)
     assert signed <= seen
+    assert {(m, COGNITO_PREFIX + p) for m, p in signed} <= seen, "each signed route has its twin"
+
+
+def test_racers_sign_in_to_an_invite_only_pool_with_an_organisers_group(
+        cloudformation: dict[str, Any]) -> None:
+    resources = cloudformation["Resources"]
+    pool = resources["RacerPool"]
+    assert pool["DeletionPolicy"] == "Retain"
+    invite_only = pool["Properties"]["AdminCreateUserConfig"]["AllowAdminCreateUserOnly"]
+    assert invite_only == {"Fn::If": ["AllowSelfSignUp", False, True]}
+    assert cloudformation["Parameters"]["SelfSignUp"]["Default"] == "false"
+    assert resources["OrganisersGroup"]["Properties"]["GroupName"] == "organisers"
+    client = resources["CliClient"]["Properties"]
+    assert client["GenerateSecret"] is False, "a public client: the CLI keeps no secret"
+    assert client["AllowedOAuthFlows"] == ["code"]
+    assert client["CallbackURLs"] == ["http://localhost:8765/callback"]
+    assert set(client["ExplicitAuthFlows"]) == {"ALLOW_USER_SRP_AUTH", "ALLOW_REFRESH_TOKEN_AUTH"}
+    (api,) = [r for r in resources.values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
+    jwt = api["Properties"]["Body"]["components"]["securitySchemes"]["RacerSignIn"]
+    config = jwt["x-amazon-apigateway-authorizer"]["jwtConfiguration"]
+    assert config["issuer"] == {"Fn::Sub": "https://cognito-idp.${AWS::Region}.amazonaws.com/${RacerPool}"}
+    assert config["audience"] == [{"Ref": "CliClient"}]
+    assert jwt["x-amazon-apigateway-authorizer"]["identitySource"] == "$request.header.Authorization"
 
 
 def test_cors_only_lets_browsers_read(sam: dict[str, Any]) -> None:

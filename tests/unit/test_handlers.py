@@ -165,7 +165,7 @@ def test_an_organiser_manages_the_winter_cup_with_the_admin_events(
         "winter-cup-2026", "reInvent2019_track", 900, 20)
     [audit] = [r for r in caplog.records if r.getMessage() == "OrganiserRequest"]
     assert (audit.route, audit.status, audit.caller) == (  # type: ignore[attr-defined]
-        "POST /boards", 201, "arn:aws:sts::123456789012:assumed-role/drboard-organisers/ada")
+        "POST /boards", 201, "iam:arn:aws:sts::123456789012:assumed-role/drboard-organisers/ada")
 
     status, updated = admin_call("admin_update_board.json")  # closes later; no maximum any more
     assert status == 200, updated

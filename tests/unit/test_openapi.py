@@ -56,6 +56,7 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("GET", "/boards/{board}/audit"),
         ("GET", "/me"),
         ("PUT", "/me/alias"),
+        ("GET", "/.well-known/drboard.json"),
     }
 
 

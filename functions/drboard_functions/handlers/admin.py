@@ -1,6 +1,8 @@
-"""The organisers' routes (IAM-authorised in the cloud): POST /boards; PATCH and DELETE
-/boards/{board}; POST /boards/{board}/close and /restore; GET /boards/{board}/export;
-PUT /boards/{board}/import; POST /boards/{board}/imports."""
+"""The organisers' routes (IAM-authorised in the cloud, or with a Cognito sign-in of the
+``organisers`` group under ``/cognito``): POST /boards; PATCH and DELETE /boards/{board}; POST
+/boards/{board}/close and /restore; GET /boards/{board}/export and /audit; PUT
+/boards/{board}/import; POST /boards/{board}/imports; DELETE /boards/{board}/racers/{racer}; PUT
+and DELETE /boards/{board}/bans/{racer}."""
 
 from __future__ import annotations
 
@@ -12,7 +14,8 @@ from aws_lambda_powertools.event_handler.middlewares import NextMiddleware
 from aws_lambda_powertools.logging import correlation_paths
 from aws_lambda_powertools.utilities.typing import LambdaContext
 
-from ..routes import admin_router, build_app
+from ..identity import caller_from_event
+from ..routes import admin_router, build_app, canonical_event
 from . import wiring
 
 logger = Logger()
@@ -21,15 +24,16 @@ metrics = Metrics()
 
 
 def audit(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
-    """Log who did what to which board: the IAM caller API Gateway authorised, the route and the
+    """Log who did what to which board: the caller API Gateway authorised, the route and the
     status. (A refused request is answered by the error handlers and does not reach this log.)"""
     response = next_middleware(app)
     event = app.current_event
+    caller = caller_from_event(event.raw_event)
     logger.info("OrganiserRequest", extra={
         "route": f"{event.http_method} {event.path}",
         "board": app.context.get("_route_args", {}).get("board"),
         "status": response.status_code,
-        "caller": event.request_context.authorizer.iam.user_arn,
+        "caller": caller.principal if caller else None,
     })
     return response
 
@@ -43,4 +47,4 @@ app.use(middlewares=[audit])
 @tracer.capture_lambda_handler
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
     app.append_context(service=wiring.service_from_environment())
-    return app.resolve(event, context)
+    return app.resolve(canonical_event(event), context)

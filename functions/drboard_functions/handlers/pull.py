@@ -1,5 +1,6 @@
 """The public reads: GET /, /boards, /boards/{board}, /boards/{board}/racers/{racer},
-/boards/{board}/view, /racers/{racer} and /racers/{racer}/submissions."""
+/boards/{board}/view, /racers/{racer}, /racers/{racer}/submissions and
+/.well-known/drboard.json."""
 
 from __future__ import annotations
 
@@ -23,5 +24,6 @@ app = build_app(pull_router)
 @metrics.log_metrics(capture_cold_start_metric=True)
 @tracer.capture_lambda_handler
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
-    app.append_context(service=wiring.service_from_environment())
+    app.append_context(service=wiring.service_from_environment(),
+                       sign_in=wiring.sign_in_from_environment())
     return app.resolve(event, context)

@@ -12,7 +12,7 @@ from aws_lambda_powertools.logging import correlation_paths
 from aws_lambda_powertools.metrics import MetricUnit
 from aws_lambda_powertools.utilities.typing import LambdaContext
 
-from ..routes import build_app, push_router
+from ..routes import build_app, canonical_event, push_router
 from . import wiring
 
 logger = Logger()
@@ -43,4 +43,4 @@ app.use(middlewares=[count_submissions])
 @tracer.capture_lambda_handler
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
     app.append_context(service=wiring.service_from_environment())
-    return app.resolve(event, context)
+    return app.resolve(canonical_event(event), context)

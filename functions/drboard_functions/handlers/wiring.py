@@ -1,8 +1,10 @@
 """Where the Lambda functions get their service: the only code that reads the environment.
 
 ``TABLE_NAME`` names the DynamoDB table (required); ``ARCHIVE_BUCKET`` names the S3 bucket that
-keeps every accepted record (optional: the pull function has none). The service and its AWS
-clients are built once per container and reused by every invocation.
+keeps every accepted record (optional: the pull function has none). ``USER_POOL_ID``,
+``USER_POOL_CLIENT_ID`` and ``USER_POOL_DOMAIN`` say how racers sign in (the pull function tells
+clients at ``/.well-known/drboard.json``). The service and its AWS clients are built once per
+container and reused by every invocation.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 import os
 from functools import cache
 
+from ..identity import SignIn
 from ..service import LeaderboardService
 
 #: What the handlers' X-Ray tracer patches: the AWS SDK, the one library that calls out. (By
@@ -30,3 +33,13 @@ def service_from_environment() -> LeaderboardService:
         DynamoDbStore(os.environ["TABLE_NAME"]),
         archive=S3Archive(bucket) if bucket else None,
     )
+
+
+@cache
+def sign_in_from_environment() -> SignIn:
+    pool = os.environ.get("USER_POOL_ID")
+    if not pool:
+        return SignIn()
+    return SignIn(kind="cognito", region=os.environ.get("AWS_REGION") or pool.split("_", 1)[0],
+                  user_pool_id=pool, client_id=os.environ.get("USER_POOL_CLIENT_ID"),
+                  domain=os.environ.get("USER_POOL_DOMAIN"), scopes=["openid", "email", "profile"])
