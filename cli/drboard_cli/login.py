@@ -51,7 +51,8 @@ def sign_in_settings(endpoint: str) -> SignIn:
         raise BoardUnreachable(f"{url} did not say how to sign in") from None
 
 
-def _cognito(settings: SignIn, endpoint: str) -> SignIn:
+def require_cognito(settings: SignIn, endpoint: str) -> SignIn:
+    """The settings, when the board takes Cognito sign-ins; else why not."""
     if settings.kind == "join-code":
         raise NotAuthorized(f"{endpoint} is a `drboard serve` board: join it with the code its "
                             "organiser shows, `drboard join CODE`")
@@ -69,7 +70,7 @@ def login_with_password(endpoint: str, settings: SignIn, username: str, password
     from pycognito.aws_srp import AWSSRP
     from pycognito.exceptions import ForceChangePasswordException
 
-    settings = _cognito(settings, endpoint)
+    settings = require_cognito(settings, endpoint)
     cognito = client or _cognito_client(settings)
     srp = AWSSRP(username=username, password=password, pool_id=settings.user_pool_id,
                  client_id=settings.client_id, client=cognito)
@@ -132,7 +133,7 @@ def login_in_browser(endpoint: str, settings: SignIn, show: Callable[[str], None
     """Open the hosted sign-in page (or print its address) and wait for its redirect."""
     from authlib.integrations.requests_client import OAuth2Session
 
-    settings = _cognito(settings, endpoint)
+    settings = require_cognito(settings, endpoint)
     if not settings.domain:
         raise NotAuthorized(f"{endpoint} has no sign-in page: use `drboard login --password`")
     session = OAuth2Session(settings.client_id, scope=" ".join(settings.scopes or ["openid"]),

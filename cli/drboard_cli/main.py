@@ -785,7 +785,7 @@ def login(ctx: Context, use_password: bool, username: str | None, no_browser: bo
 
     with edge():
         endpoint = _endpoint(ctx, "login")
-        settings = signing_in.sign_in_settings(endpoint)
+        settings = signing_in.require_cognito(signing_in.sign_in_settings(endpoint), endpoint)
         if use_password:
             name = username or click.prompt("User name")
             password = click.prompt("Password", hide_input=True)

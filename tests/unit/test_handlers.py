@@ -270,3 +270,42 @@ def test_the_handlers_run_on_dynamodb_and_s3(aws: None, monkeypatch: pytest.Monk
         assert [e["racer"] for e in json.loads(page["body"])["entries"]] == [record.racer]
     finally:
         wiring.service_from_environment.cache_clear()
+
+
+# ---- signed in with Cognito: the same routes under /cognito, behind the JWT authorizer ----------
+
+
+def _signed_in(event: dict[str, Any], claims: dict[str, Any]) -> dict[str, Any]:
+    event = json.loads(json.dumps(event))
+    for holder in (event, event["requestContext"]["http"]):
+        key = "rawPath" if holder is event else "path"
+        holder[key] = "/cognito" + holder[key]
+    event["requestContext"]["authorizer"] = {"jwt": {"claims": claims, "scopes": None}}
+    return event
+
+
+ACCESS = {"sub": "ada-sub", "username": "ada", "token_use": "access",
+          "cognito:groups": "[racers]"}
+
+
+def test_a_racer_signed_in_with_cognito_pushes_through_the_twin_route(
+        service: LeaderboardService) -> None:
+    answer = push.lambda_handler(_signed_in(load("push.json"), ACCESS), FakeLambdaContext())
+    assert answer["statusCode"] == 201, answer["body"]
+    who = load("push.json") | {"rawPath": "/me", "routeKey": "GET /me", "body": None}
+    who["requestContext"]["http"] |= {"method": "GET", "path": "/me"}
+    me = push.lambda_handler(_signed_in(who, ACCESS), FakeLambdaContext())
+    assert (json.loads(me["body"])["principal"], json.loads(me["body"])["alias"]) == (
+        "cognito:ada-sub", event_record().racer)
+
+
+def test_an_id_token_or_a_racer_cannot_reach_the_organiser_routes(service: LeaderboardService) -> None:
+    as_id_token = _signed_in(load("push.json"), ACCESS | {"token_use": "id"})
+    assert push.lambda_handler(as_id_token, FakeLambdaContext())["statusCode"] == 401
+    racer = admin.lambda_handler(_signed_in(load("admin_create_board.json"), ACCESS), FakeLambdaContext())
+    assert racer["statusCode"] == 403
+    organiser = ACCESS | {"sub": "org-sub", "cognito:groups": "[organisers]"}
+    created = admin.lambda_handler(_signed_in(load("admin_create_board.json"), organiser),
+                                   FakeLambdaContext())
+    assert created["statusCode"] == 201, created["body"]
+    assert service.audit("winter-cup-2026").events[0].actor == "cognito:org-sub"
