@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import lzma
+import shutil
 import tarfile
+import zlib
+from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
 
 from . import limits
@@ -21,24 +25,40 @@ def unpack(archive: Path, into: Path) -> Path:
     Refuses absolute paths, ``..``, links and devices, more than MAX_ARCHIVE_MEMBERS members and
     more than MAX_ARCHIVE_UNPACKED_BYTES in all. Returns the run folder inside ``into``.
     """
-    name = archive.name
+    name = str(archive)
     try:
         with tarfile.open(archive, "r:*") as tar:
-            members = _checked_members(tar, name)
-            tar.extractall(into, members=members, filter="data")
+            for member in _checked_members(tar, name):
+                _write(tar, member, into)
     except tarfile.TarError as error:
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise AssemblyError(name, "", f"not a readable tar archive ({reason})") from None
-    except (OSError, EOFError) as error:
+    except (zlib.error, lzma.LZMAError, EOFError) as error:
+        raise AssemblyError(name, "", f"not a readable tar archive ({error or 'truncated'})") from None
+    except OSError as error:
         raise AssemblyError(name, "", f"cannot be unpacked ({error})") from None
     return _single_top_folder(into)
 
 
-def _checked_members(tar: tarfile.TarFile, name: str) -> list[tarfile.TarInfo]:
-    members: list[tarfile.TarInfo] = []
+def _write(tar: tarfile.TarFile, member: tarfile.TarInfo, into: Path) -> None:
+    """Write one checked member as a plain file or folder: no modes, owners or times taken from
+    the archive (tarfile's own extraction filters need Python 3.11.4 or newer)."""
+    target = into.joinpath(*PurePosixPath(member.name).parts)
+    if member.isdir():
+        target.mkdir(parents=True, exist_ok=True)
+        return
+    source = tar.extractfile(member)
+    if source is None:
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with source, target.open("wb") as out:
+        shutil.copyfileobj(source, out)
+
+
+def _checked_members(tar: tarfile.TarFile, name: str) -> Iterator[tarfile.TarInfo]:
     total = 0
-    for member in tar:
-        if len(members) >= limits.MAX_ARCHIVE_MEMBERS:
+    for count, member in enumerate(tar, start=1):
+        if count > limits.MAX_ARCHIVE_MEMBERS:
             raise AssemblyError(name, "", f"holds more than {limits.MAX_ARCHIVE_MEMBERS} members")
         path = PurePosixPath(member.name)
         if path.is_absolute() or member.name.startswith(("/", "\\")):
@@ -53,8 +73,7 @@ def _checked_members(tar: tarfile.TarFile, name: str) -> list[tarfile.TarInfo]:
         if total > limits.MAX_ARCHIVE_UNPACKED_BYTES:
             raise AssemblyError(name, member.name, "the archive unpacks to more than "
                                 f"{limits.MAX_ARCHIVE_UNPACKED_BYTES:,} bytes")
-        members.append(member)
-    return members
+        yield member
 
 
 def _single_top_folder(into: Path) -> Path:

@@ -40,13 +40,18 @@ def assemble(path: Path, overrides: Overrides | None = None, *,
     if the folder's other evaluation metrics files were not there.
     """
     overrides = overrides or Overrides()
-    if is_archive(path):
-        with tempfile.TemporaryDirectory(prefix="drboard-") as scratch:
-            root = unpack(path, Path(scratch))
-            return _assemble_folder(root, overrides, _archive_stem(path), evaluation)
-    if not path.exists():
-        raise AssemblyError(str(path), "", "does not exist")
-    return _assemble_folder(path, overrides, path.resolve().name, evaluation)
+    try:
+        if is_archive(path):
+            with tempfile.TemporaryDirectory(prefix="drboard-") as scratch:
+                root = unpack(path, Path(scratch))
+                return _assemble_folder(root, str(path), overrides, _archive_stem(path), evaluation)
+        if not path.exists():
+            raise AssemblyError(str(path), "", "does not exist")
+        return _assemble_folder(path, str(path), overrides, path.resolve().name, evaluation)
+    except AssemblyError as error:
+        if not error.file.startswith("--"):
+            error.given = str(path)
+        raise
 
 
 def planned_trials(path: Path, evaluation: str) -> int | None:
@@ -62,7 +67,7 @@ def planned_trials(path: Path, evaluation: str) -> int | None:
               for p in files.params]
     naming = _params_for(metrics.name, [p for p in params if p.kind == "evaluation"])
     trials = naming.text("NUMBER_OF_TRIALS") if naming else None
-    return int(trials) if trials and trials.isdigit() else None
+    return int(trials) if trials and trials.isdigit() and len(trials) <= 6 else None
 
 
 def _archive_stem(path: Path) -> str:
@@ -90,10 +95,9 @@ class _Reader:
         return data
 
 
-def _assemble_folder(root: Path, overrides: Overrides, default_model: str,
+def _assemble_folder(root: Path, where: str, overrides: Overrides, default_model: str,
                      evaluation: str | None) -> Record:
     files = find_run_files(root)
-    where = root.name or str(root)
     if evaluation is not None:
         files.evaluation_metrics = [_only_evaluation(files, evaluation, where)]
     reader = _Reader(files)

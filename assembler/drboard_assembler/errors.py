@@ -8,7 +8,8 @@ from collections.abc import Sequence
 class AssemblyError(Exception):
     """Bad input: a file is missing, malformed, oversized or inconsistent.
 
-    ``flag`` names the command-line flag that supplies the value, when one does.
+    ``flag`` names the command-line flag that supplies the value, when one does. ``given`` is the
+    path the racer gave (a folder or an archive), which ``file`` is inside.
     """
 
     def __init__(self, file: str, field: str, problem: str, *, flag: str | None = None) -> None:
@@ -16,10 +17,12 @@ class AssemblyError(Exception):
         self.field = field
         self.problem = problem
         self.flag = flag
-        super().__init__(str(self))
+        self.given: str | None = None
+        super().__init__(problem)
 
     def __str__(self) -> str:
-        where = f"{self.file}: {self.field}" if self.field else self.file
+        # dict.fromkeys drops the file when it is the given path itself
+        where = ": ".join(dict.fromkeys(part for part in (self.given, self.file, self.field) if part))
         hint = f" (use {self.flag})" if self.flag else ""
         return f"{where}: {self.problem}{hint}"
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -61,9 +62,8 @@ def find_run_files(root: Path) -> RunFiles:
             if seen > limits.MAX_FILES_SCANNED:
                 raise AssemblyError(str(root), "", f"holds more than {limits.MAX_FILES_SCANNED} files")
             path = Path(folder, filename)
-            if path.is_symlink() and not _inside(path, root):
-                continue
-            _classify(found, path)
+            if _regular_file_inside(path, root):
+                _classify(found, path)
     return found
 
 
@@ -75,8 +75,16 @@ def evaluation_files(root: Path) -> list[str]:
     return sorted(files.name(path) for path in files.evaluation_metrics)
 
 
-def _inside(path: Path, root: Path) -> bool:
-    return path.resolve().is_relative_to(root.resolve())
+def _regular_file_inside(path: Path, root: Path) -> bool:
+    """Whether the name is a regular file of the run folder: a link is followed only within
+    it, and FIFOs, sockets, devices and links that lead nowhere (or round in a loop) are
+    passed over."""
+    try:
+        if path.is_symlink() and not path.resolve(strict=True).is_relative_to(root.resolve()):
+            return False
+        return stat.S_ISREG(path.stat().st_mode)
+    except (OSError, RuntimeError):  # a dangling link; a link loop (RuntimeError before 3.13)
+        return False
 
 
 def _classify(found: RunFiles, path: Path) -> None:

@@ -5,16 +5,18 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass
 
 from . import limits
 from .errors import AssemblyError
-from .reading import validate_json
-from .record import CurvePoint, EvaluationRun, Lap, TrainingSummary
+from .reading import from_validation_error, validate_json
+from .record import Count, CurvePoint, EvaluationRun, Figure, Lap, Moment, Percent, TrainingSummary
 
-NonNegative = Annotated[int, Field(ge=0)]
-Percent = Annotated[float, Field(ge=0, le=100)]
+# The record's own bounds, so that a file past them is refused naming its own field.
+Trial = Annotated[int, Field(ge=0, le=100_000)]
+Episode = Annotated[int, Field(ge=0, le=100_000_000)]
+Finite = Annotated[Figure, Field(allow_inf_nan=False)]
 
 
 class _Entry(BaseModel):
@@ -22,17 +24,17 @@ class _Entry(BaseModel):
     completion_percentage: Percent
     elapsed_time_in_milliseconds: Annotated[int, Field(ge=0, le=limits.MAX_LAP_MS)]
     episode_status: Annotated[str, Field(max_length=32)] = ""
-    trial: NonNegative = 0
+    trial: Trial = 0
 
 
 class _EvaluationEntry(_Entry):
-    off_track_count: NonNegative = 0
-    crash_count: NonNegative = 0
-    reset_count: NonNegative = 0
-    immobilized_count: NonNegative | None = None
-    reversed_count: NonNegative | None = None
-    start_time: Annotated[float, Field(ge=0, le=1e14, allow_inf_nan=False)] | None = None
-    metric_time: Annotated[float, Field(ge=0, le=1e14, allow_inf_nan=False)] | None = None
+    off_track_count: Count = 0
+    crash_count: Count = 0
+    reset_count: Count = 0
+    immobilized_count: Count | None = None
+    reversed_count: Count | None = None
+    start_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
+    metric_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
 
 
 @dataclass(slots=True, config=ConfigDict(extra="ignore"))
@@ -41,12 +43,12 @@ class _TrainingEntry:
     completion_percentage: Percent
     elapsed_time_in_milliseconds: Annotated[int, Field(ge=0, le=limits.MAX_LAP_MS)]
     episode_status: Annotated[str, Field(max_length=32)] = ""
-    trial: NonNegative = 0
-    episode: NonNegative = 0
-    phase: str = "training"
-    reward_score: float = 0.0
-    start_time: float | None = None
-    metric_time: float | None = None
+    trial: Trial = 0
+    episode: Episode = 0
+    phase: Annotated[str, Field(max_length=32)] = "training"
+    reward_score: Finite = 0.0
+    start_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
+    metric_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
 
 
 class _EvaluationFile(BaseModel):
@@ -66,23 +68,27 @@ def load_evaluation(data: bytes, name: str) -> EvaluationRun:
     if len(entries) > limits.MAX_LAPS_PER_RUN:
         raise AssemblyError(name, "metrics",
                             f"holds {len(entries)} laps, over the limit of {limits.MAX_LAPS_PER_RUN}")
-    laps = [
-        Lap(
-            trial=entry.trial or number,
-            time_ms=entry.elapsed_time_in_milliseconds,
-            completion_pct=entry.completion_percentage,
-            status=entry.episode_status,
-            off_track=entry.off_track_count,
-            crashes=entry.crash_count,
-            resets=entry.reset_count,
-            started_ms=entry.start_time,
-            ended_ms=entry.metric_time,
-            immobilized=entry.immobilized_count,
-            reversed=entry.reversed_count,
-        )
-        for number, entry in enumerate(entries, start=1)
-    ]
-    return EvaluationRun.from_laps(name, laps)
+    try:
+        return EvaluationRun.from_laps(name, [_lap(number, entry)
+                                              for number, entry in enumerate(entries, start=1)])
+    except ValidationError as error:
+        raise from_validation_error(error, name) from None
+
+
+def _lap(number: int, entry: _EvaluationEntry) -> Lap:
+    return Lap(
+        trial=entry.trial or number,
+        time_ms=entry.elapsed_time_in_milliseconds,
+        completion_pct=entry.completion_percentage,
+        status=entry.episode_status,
+        off_track=entry.off_track_count,
+        crashes=entry.crash_count,
+        resets=entry.reset_count,
+        started_ms=entry.start_time,
+        ended_ms=entry.metric_time,
+        immobilized=entry.immobilized_count,
+        reversed=entry.reversed_count,
+    )
 
 
 def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None) -> TrainingSummary:

@@ -39,7 +39,11 @@ def edit_json(path: Path, change: Callable[[Any], None]) -> None:
 def assembly_error(path: Path, overrides: Overrides | None = None) -> str:
     with pytest.raises(AssemblyError) as caught:
         assemble(path, overrides)
-    return str(caught.value)
+    message = str(caught.value)
+    if caught.value.given is not None:  # the path the racer gave comes first
+        assert message.startswith(f"{path}: ")
+        message = message.removeprefix(f"{path}: ")
+    return message
 
 
 def test_example_paths_used_here_exist() -> None:
@@ -80,14 +84,14 @@ def test_missing_evaluation_metrics(tmp_path: Path) -> None:
     run = copy_example(tmp_path)
     shutil.rmtree(run / "metrics" / "evaluation")
     message = assembly_error(run)
-    assert message.startswith(f"{CONSOLE}: evaluation metrics: ")
+    assert message.startswith("evaluation metrics: ")
     assert "no evaluation metrics file found" in message
 
 
 def test_missing_model_metadata(tmp_path: Path) -> None:
     run = copy_example(tmp_path)
     (run / "model_metadata.json").unlink()
-    assert assembly_error(run).startswith(f"{CONSOLE}: model_metadata.json: not found")
+    assert assembly_error(run).startswith("model_metadata.json: not found")
 
 
 # ------------------------------------------------------------------ wrong types and values
@@ -223,7 +227,7 @@ def test_hostile_archive_member(tmp_path: Path, member: tuple[tarfile.TarInfo, b
                                 problem: str) -> None:
     archive = _archive(tmp_path, member)
     message = assembly_error(archive)
-    assert message.startswith(f"{archive.name}: {member[0].name}: ")
+    assert message.startswith(f"{member[0].name}: ")
     assert problem in message
     assert not (tmp_path / "evil.json").exists()
     assert not Path("/tmp/drboard-evil.json").exists()
@@ -234,14 +238,14 @@ def test_archive_bigger_than_the_unpacked_bound(tmp_path: Path,
     monkeypatch.setattr(limits, "MAX_ARCHIVE_UNPACKED_BYTES", 4096)
     archive = _archive(tmp_path)
     message = assembly_error(archive)
-    assert message.startswith(f"{archive.name}: {CONSOLE}/")
+    assert message.startswith(f"{CONSOLE}/")
     assert "unpacks to more than" in message
 
 
 def test_file_that_is_not_an_archive(tmp_path: Path) -> None:
     archive = tmp_path / "run.tar.gz"
     archive.write_bytes(b"not a tar file")
-    assert assembly_error(archive).startswith("run.tar.gz: not a readable tar archive")
+    assert assembly_error(archive).startswith("not a readable tar archive")
 
 
 # ------------------------------------------------------------------ tracks and racers
@@ -275,7 +279,7 @@ def test_ambiguous_world_name_in_params(tmp_path: Path) -> None:
 
 def test_track_flag_naming_a_track_no_evaluation_ran_on(tmp_path: Path) -> None:
     message = assembly_error(EXAMPLES / CONSOLE, Overrides(track="Oval_track"))
-    assert message.startswith(f"{CONSOLE}: WORLD_NAME: no evaluation ran on Oval_track")
+    assert message.startswith("WORLD_NAME: no evaluation ran on Oval_track")
     assert "reInvent2019_track" in message and "--track" in message
 
 
@@ -286,7 +290,7 @@ def test_missing_racer_names_the_racer_flag(tmp_path: Path) -> None:
         params.write_text("\n".join(
             line for line in lines if not line.startswith(("RACER_NAME", "CAR_NAME"))) + "\n")
     message = assembly_error(run)
-    assert message.startswith(f"{CONSOLE}: RACER_NAME: ")
+    assert message.startswith("RACER_NAME: ")
     assert "--racer" in message
     assert assemble(run, Overrides(racer="Speedy")).racer == "Speedy"
 
@@ -300,7 +304,7 @@ def test_evaluations_on_two_tracks_name_the_track_flag(tmp_path: Path) -> None:
         text.replace('WORLD_NAME: "reInvent2019_track"', 'WORLD_NAME: "Oval_track"')
         .replace(Path(EVALUATION).name, oval_metrics))
     message = assembly_error(run)
-    assert message.startswith(f"{CONSOLE}: WORLD_NAME: evaluations on several tracks")
+    assert message.startswith("WORLD_NAME: evaluations on several tracks")
     assert "Oval_track" in message and "reInvent2019_track" in message
     assert "--track" in message
 

@@ -296,8 +296,8 @@ def test_one_evaluation_of_an_archive(tmp_path: Path) -> None:
 def test_an_evaluation_the_folder_does_not_hold_is_named_in_the_error(evaluation: str) -> None:
     with pytest.raises(AssemblyError) as caught:
         assemble(EXAMPLES / "comet-sac-drfc", evaluation=evaluation)
-    assert str(caught.value) == (f"comet-sac-drfc: {evaluation}: no such evaluation metrics file "
-                                 "in the run folder")
+    assert str(caught.value) == (f"{EXAMPLES / 'comet-sac-drfc'}: {evaluation}: no such evaluation "
+                                 "metrics file in the run folder")
 
 
 def test_planned_trials_come_from_the_parameters_naming_the_evaluation() -> None:

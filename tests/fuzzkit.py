@@ -1,0 +1,234 @@
+"""Seeded mutations of the example runs, for fuzzing the assembler.
+
+``mutate(seed, into)`` copies one example run into ``into`` and breaks it in one to three ways
+drawn from the seed: flipped, cut or inserted bytes; a JSON or YAML value swapped for a hostile
+one (NaN, huge or negative numbers, 5,000-digit integers, deep nesting, YAML aliases and tags);
+special files (FIFOs, symbolic-link loops, links out of the folder); a file removed, emptied,
+duplicated or grown past its bound; or the run packed as a ``.tar.gz`` that is then damaged.
+The same seed always gives the same case. Used by tests/unit/test_fuzz_assembler.py (a small
+budget) and bench/fuzz_assembler.py (thousands of cases, with time and memory bounds).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import shutil
+import tarfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+HOSTILE_VALUES: list[Any] = [
+    float("nan"), float("inf"), -float("inf"), 1e308, -1e308, -1, 0, 10**30, 2**63, "", None,
+    True, [], {}, "x" * 100_000, "\u202eevil\u200b", [[[[[[[[[[[[[[[[[[[[1]]]]]]]]]]]]]]]]]]]],
+    {"nested": {"deeper": {"and": {"deeper": [1, 2, 3]}}}}, 3.5, "3", "NaN", "1e999",
+]
+
+HOSTILE_YAML = [
+    'a: &a ["x","x","x","x","x","x","x","x"]\nb: &b [*a,*a,*a,*a,*a,*a,*a,*a]\n'
+    "c: &c [*b,*b,*b,*b,*b,*b,*b,*b]\nd: [*c,*c,*c,*c,*c,*c,*c,*c]\n",
+    "WORLD_NAME: " + "[" * 3000 + "]" * 3000 + "\n",
+    "".join(" " * depth + "- \n" for depth in range(100)),
+    "NUMBER_OF_TRIALS: " + "9" * 5000 + "\n",
+    "WORLD_NAME: !!python/object/apply:os.system ['true']\n",
+    "WORLD_NAME: !!binary aGVsbG8=\n",
+    "RACER_NAME: [1, 2]\nWORLD_NAME: {a: b}\n",
+    "- just\n- a\n- list\n",
+    "WORLD_NAME: .nan\nNUMBER_OF_TRIALS: .inf\n",
+    "\t\x00\xff",
+    "WORLD_NAME: reInvent2019_track\nWORLD_NAME: Oval_track\n",
+    "RACE_TYPE: HEAD_TO_BOT\nNUMBER_OF_BOT_CARS: -5\n",
+]
+
+
+def example_runs() -> list[Path]:
+    return sorted(p for p in EXAMPLES.iterdir() if p.is_dir())
+
+
+def mutate(seed: int, into: Path) -> Path:
+    """Write case ``seed`` under ``into`` and return the path to assemble."""
+    rng = random.Random(seed)
+    source = rng.choice(example_runs())
+    run = into / source.name
+    shutil.copytree(source, run)
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        rng.choice(FOLDER_MUTATIONS)(rng, run)
+    if rng.random() < 0.2:
+        return _archive(rng, run, into)
+    return run
+
+
+def _files(run: Path) -> list[Path]:
+    return sorted(p for p in run.rglob("*") if p.is_file() and not p.is_symlink())
+
+
+def _pick(rng: random.Random, run: Path, suffixes: tuple[str, ...] = ()) -> Path | None:
+    files = [p for p in _files(run) if not suffixes or p.suffix in suffixes]
+    return rng.choice(files) if files else None
+
+
+def flip_bytes(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run)) is None:
+        return
+    data = bytearray(path.read_bytes())
+    for _ in range(rng.randint(1, 16)):
+        if data:
+            data[rng.randrange(len(data))] = rng.randrange(256)
+    path.write_bytes(bytes(data))
+
+
+def cut_bytes(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run)) is None:
+        return
+    data = path.read_bytes()
+    path.write_bytes(data[: rng.randint(0, len(data))])
+
+
+def insert_bytes(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run)) is None:
+        return
+    data = path.read_bytes()
+    at = rng.randint(0, len(data))
+    junk = rng.choice([b"\x00", b"{", b"]", b"\xff\xfe", b"\n\t- ", b"&a ", b"*a", b"NaN", b"9" * 5000])
+    path.write_bytes(data[:at] + junk + data[at:])
+
+
+def swap_json_value(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run, (".json",))) is None:
+        return
+    try:
+        data = json.loads(path.read_bytes())
+    except ValueError:
+        return
+    _replace_leaf(rng, data, rng.choice(HOSTILE_VALUES))
+    path.write_text(json.dumps(data))
+
+
+def _replace_leaf(rng: random.Random, data: Any, value: Any) -> None:
+    for _ in range(8):
+        if isinstance(data, dict) and data:
+            key = rng.choice(sorted(data))
+            if not isinstance(data[key], (dict, list)) or rng.random() < 0.2:
+                if rng.random() < 0.15:
+                    del data[key]
+                else:
+                    data[key] = value
+                return
+            data = data[key]
+        elif isinstance(data, list) and data:
+            index = rng.randrange(len(data))
+            if not isinstance(data[index], (dict, list)) or rng.random() < 0.2:
+                data[index] = value
+                return
+            data = data[index]
+        else:
+            return
+
+
+def big_json_number(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run, (".json",))) is None:
+        return
+    text = path.read_text(errors="replace")
+    digits = [i for i, ch in enumerate(text) if ch.isdigit()]
+    if digits:
+        at = rng.choice(digits)
+        path.write_text(text[:at] + "9" * rng.choice((400, 5000)) + text[at:])
+
+
+def swap_yaml(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run, (".yaml", ".yml"))) is None:
+        return
+    hostile = rng.choice(HOSTILE_YAML)
+    if rng.random() < 0.5:
+        path.write_text(hostile)
+    else:
+        path.write_text(path.read_text(errors="replace") + hostile)
+
+
+def edit_yaml_value(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run, (".yaml", ".yml"))) is None:
+        return
+    lines = path.read_text(errors="replace").splitlines()
+    if not lines:
+        return
+    index = rng.randrange(len(lines))
+    key = lines[index].split(":", 1)[0]
+    value = rng.choice(['""', "-1", "1e999", "null", "[]", '"\u202eabc"', "9" * 30,
+                        '"reInvent2019_track_oa"', '"OBJECT_AVOIDANCE"', '"HEAD_TO_BOT"', "~"])
+    lines[index] = f"{key}: {value}"
+    path.write_text("\n".join(lines) + "\n")
+
+
+def special_file(rng: random.Random, run: Path) -> None:
+    folder = rng.choice([run, *(p for p in run.rglob("*") if p.is_dir() and not p.is_symlink())])
+    name = rng.choice(["model_metadata.json", "evaluation-20990101000000-x.json", "x.yaml",
+                       "hyperparameters.json", "loop"])
+    target = folder / name
+    if target.exists() or target.is_symlink():
+        if target.is_dir():
+            return
+        target.unlink()
+    kind = rng.choice(["fifo", "loop", "dangling", "outside", "dir"])
+    if kind == "fifo" and hasattr(os, "mkfifo"):
+        os.mkfifo(target)
+    elif kind == "loop":
+        target.symlink_to(target)
+    elif kind == "dangling":
+        target.symlink_to(run / "no-such-file")
+    elif kind == "outside":
+        target.symlink_to("/etc/hostname")
+    else:
+        target.mkdir()
+
+
+def remove_or_empty(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run)) is None:
+        return
+    if rng.random() < 0.5:
+        path.unlink()
+    else:
+        path.write_bytes(b"")
+
+
+def duplicate_file(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run)) is None:
+        return
+    copy = path.with_name(f"copy-{path.name}")
+    shutil.copy(path, copy)
+
+
+def oversize_file(rng: random.Random, run: Path) -> None:
+    if (path := _pick(rng, run, (".json", ".yaml"))) is None:
+        return
+    with path.open("r+b") as file:  # sparse: past every bound without using the disk
+        file.truncate(rng.choice((2 * 1024**2, 300 * 1024**2)))
+
+
+FOLDER_MUTATIONS: list[Callable[[random.Random, Path], None]] = [
+    flip_bytes, cut_bytes, insert_bytes, swap_json_value, swap_json_value, big_json_number,
+    swap_yaml, edit_yaml_value, special_file, remove_or_empty, duplicate_file, oversize_file,
+]
+
+
+def _archive(rng: random.Random, run: Path, into: Path) -> Path:
+    archive = into / f"{run.name}.tar.gz"
+    with tarfile.open(archive, "w:gz") as tar:
+        for path in sorted(run.rglob("*")):
+            if path.is_symlink() or path.is_file() or path.is_dir():
+                if not path.is_symlink() and path.is_file() and path.stat().st_size > 1024**2:
+                    continue
+                tar.add(path, arcname=str(path.relative_to(into)), recursive=False)
+    shutil.rmtree(run)
+    damage = rng.choice(["none", "cut", "flip"])
+    data = bytearray(archive.read_bytes())
+    if damage == "cut":
+        data = data[: rng.randint(0, len(data))]
+    elif damage == "flip" and data:
+        for _ in range(rng.randint(1, 8)):
+            data[rng.randrange(len(data))] = rng.randrange(256)
+    archive.write_bytes(bytes(data))
+    return archive
