@@ -4,7 +4,8 @@
 drawn from the seed: flipped, cut or inserted bytes; a JSON or YAML value swapped for a hostile
 one (NaN, huge or negative numbers, 5,000-digit integers, deep nesting, YAML aliases and tags);
 special files (FIFOs, symbolic-link loops, links out of the folder); a file removed, emptied,
-duplicated or grown past its bound; or the run packed as a ``.tar.gz`` that is then damaged.
+duplicated or grown past its bound; a job log added, its lines cut or garbled; or the run
+packed as a ``.tar.gz`` that is then damaged.
 The same seed always gives the same case. Used by tests/unit/test_fuzz_assembler.py (a small
 budget) and bench/fuzz_assembler.py (thousands of cases, with time and memory bounds).
 """
@@ -19,6 +20,8 @@ import tarfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from tests import logkit
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -208,9 +211,35 @@ def oversize_file(rng: random.Random, run: Path) -> None:
         file.truncate(rng.choice((2 * 1024**2, 300 * 1024**2)))
 
 
+def add_log(rng: random.Random, run: Path) -> None:
+    """A job log beside (or instead of) the run's files, its lines perhaps damaged."""
+    laps = [(rng.uniform(0.01, 40), rng.choice(["lap_complete", "off_track", "crashed", "x"]))
+            for _ in range(rng.randint(0, 4))]
+    params = logkit.job_params(rng.choice(["EVALUATION", "TRAINING", "SUBMISSION", ""]),
+                               world=rng.choice(["reInvent2019_track", "Spain_track", "nowhere", ""]),
+                               racer=rng.choice(["Logged", "", "\u202eevil"]))
+    lines = logkit.simulation_log(params, laps, prefix=rng.choice(["", logkit.DROA_PREFIX]),
+                                  actions=rng.choice([None, [], {"speed": 1}, "junk"])).splitlines()
+    for _ in range(rng.randint(0, 6)):
+        if lines:
+            index = rng.randrange(len(lines))
+            lines[index] = lines[index][: rng.randint(0, len(lines[index]))] + rng.choice(
+                ["", ",nan,", "[" * 50, "'", "9" * 400])
+    if rng.random() < 0.4:
+        for name in ("model_metadata.json", "model"):
+            target = run / name
+            if target.is_dir():
+                shutil.rmtree(target)
+            elif target.exists():
+                target.unlink()
+    logkit.write(run / "logs" / "evaluation" / "evaluation-20240501101010-Fz-robomaker.log",
+                 "\n".join(lines) + "\n")
+
+
 FOLDER_MUTATIONS: list[Callable[[random.Random, Path], None]] = [
     flip_bytes, cut_bytes, insert_bytes, swap_json_value, swap_json_value, big_json_number,
     swap_yaml, edit_yaml_value, special_file, remove_or_empty, duplicate_file, oversize_file,
+    add_log, add_log,
 ]
 
 

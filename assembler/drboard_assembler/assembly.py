@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import tempfile
 from dataclasses import dataclass
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 from pydantic import ValidationError
 
@@ -15,10 +16,11 @@ from .catalog import ResolvedTrack, UnknownTrackError, default_catalog
 from .design import load_design
 from .errors import AssemblyError
 from .layout import RunFiles, find_run_files, shallowest
+from .logs import JobLog, read_log
 from .metrics import load_evaluation, load_training
 from .params import RunParams, load_params
 from .reading import from_validation_error, read_bounded
-from .record import EvaluationRun, RaceType, Record, SourceFile, implausible_lap
+from .record import Design, EvaluationRun, RaceType, Record, SourceFile, implausible_lap
 
 
 @dataclass(frozen=True)
@@ -29,6 +31,7 @@ class Overrides:
     racer: str | None = None
     model: str | None = None
     custom_track: bool = False
+    race_type: str | None = None
 
 
 def assemble(path: Path, overrides: Overrides | None = None, *,
@@ -44,7 +47,9 @@ def assemble(path: Path, overrides: Overrides | None = None, *,
         if is_archive(path):
             with tempfile.TemporaryDirectory(prefix="drboard-") as scratch:
                 root = unpack(path, Path(scratch))
-                return _assemble_folder(root, str(path), overrides, _archive_stem(path), evaluation)
+                # Named as the folder it unpacks to, so that the folder and its archive are one run.
+                model = root.name if root != Path(scratch) else _archive_stem(path)
+                return _assemble_folder(root, str(path), overrides, model, evaluation)
         if not path.exists():
             raise AssemblyError(str(path), "", "does not exist")
         return _assemble_folder(path, str(path), overrides, path.resolve().name, evaluation)
@@ -88,59 +93,70 @@ class _Reader:
     def read(self, path: Path, role: str, max_bytes: int) -> bytes:
         name = self.files.name(path)
         data = read_bounded(path, name, max_bytes)
-        self.provenance.append(SourceFile.model_validate({
-            "role": role, "path": name[: limits.MAX_TEXT_CHARS],
-            "sha256": hashlib.sha256(data).hexdigest(), "bytes": len(data),
-        }))
+        self.note(role, name, hashlib.sha256(data).hexdigest(), len(data))
         return data
+
+    def read_new(self, path: Path, role: str, max_bytes: int) -> bytes | None:
+        """The file's bytes, or None when a file of the same role and content was read already
+        (a download that holds the same evaluation twice)."""
+        data = read_bounded(path, self.files.name(path), max_bytes)
+        digest = hashlib.sha256(data).hexdigest()
+        if any(s.role == role and s.sha256 == digest for s in self.provenance):
+            return None
+        self.note(role, self.files.name(path), digest, len(data))
+        return data
+
+    def note(self, role: str, name: str, sha256: str, size: int) -> None:
+        self.provenance.append(SourceFile.model_validate({
+            "role": role, "path": name[: limits.MAX_TEXT_CHARS], "sha256": sha256,
+            "bytes": min(size, limits.MAX_TRAINING_FILE_BYTES),
+        }))
 
 
 def _assemble_folder(root: Path, where: str, overrides: Overrides, default_model: str,
                      evaluation: str | None) -> Record:
     files = find_run_files(root)
+    _refuse_several_runs(files, where)
     if evaluation is not None:
         files.evaluation_metrics = [_only_evaluation(files, evaluation, where)]
     reader = _Reader(files)
-
-    metadata_path = shallowest(files.model_metadata, root)
-    if metadata_path is None:
-        raise AssemblyError(where, "model_metadata.json", "not found in the run folder")
-    hyper_path = shallowest(files.hyperparameters, root)
-    design = load_design(
-        reader.read(metadata_path, "model_metadata", limits.MAX_SMALL_FILE_BYTES),
-        files.name(metadata_path),
-        reader.read(hyper_path, "hyperparameters", limits.MAX_SMALL_FILE_BYTES)
-        if hyper_path else None,
-        files.name(hyper_path) if hyper_path else "hyperparameters.json",
-    )
+    logs = [read_log(p, files.name(p)) for p in sorted(files.logs)[: limits.MAX_LOG_FILES]]
+    evaluation_logs = [log for log in logs if log.is_evaluation and log.laps()]
+    if not files.evaluation_metrics and not (evaluation is None and evaluation_logs):
+        raise AssemblyError(where, "evaluation", "there is no evaluation in it: no evaluation "
+                            "metrics file (metrics/evaluation/*.json or metrics/EvaluationMetrics-"
+                            "*.json) and no evaluation log")
 
     params = [
         load_params(reader.read(p, "training_params", limits.MAX_SMALL_FILE_BYTES), files.name(p))
         for p in files.params
     ]
-    training_params = [p for p in params if p.kind == "training"]
-    evaluation_params = [p for p in params if p.kind == "evaluation"]
-    if not files.evaluation_metrics:
-        raise AssemblyError(where, "evaluation metrics",
-                            "no evaluation metrics file found (metrics/evaluation/*.json or "
-                            "metrics/EvaluationMetrics-*.json)")
+    logged = [log.params for log in logs if log.params is not None]
+    training_params = [p for p in params + logged if p.kind == "training"]
+    evaluation_params = [p for p in params + logged if p.kind == "evaluation"]
+    design = _design(files, logs, evaluation_params + training_params, reader, where)
+
     runs: list[tuple[EvaluationRun, RunParams | None]] = []
     # Parameters that name only metrics files the folder does not hold describe another run.
     named_files = {p.metrics_file for p in evaluation_params if p.metrics_file}
     foreign = bool(named_files) and not named_files & {p.name for p in files.evaluation_metrics}
     for path in files.evaluation_metrics:
-        run = load_evaluation(
-            reader.read(path, "evaluation_metrics", limits.MAX_EVALUATION_FILE_BYTES),
-            files.name(path),
-        )
+        data = reader.read_new(path, "evaluation_metrics", limits.MAX_EVALUATION_FILE_BYTES)
+        if data is None:
+            continue
+        run = load_evaluation(data, files.name(path))
         named = _params_for(path.name, evaluation_params)
         if named is not None or foreign:
             run = run.model_copy(update={"named_by_params": named is not None})
         runs.append((run, named))
+    if not runs:  # laps from the evaluation logs, where no metrics file is present
+        for log in evaluation_logs:
+            _note_log(reader, log)
+            runs.append((EvaluationRun.from_laps(log.name, log.laps()), log.params))
 
-    track = _choose_track(runs, evaluation_params, overrides, where)
-    kept = [(run, p) for run, p in runs if p is None or _names_track(p, track)]
-    if not kept:
+    track = _choose_track(runs, evaluation_params, overrides)
+    kept = [(run, p) for run, p in runs if track is None or p is None or _names_track(p, track)]
+    if not kept and track is not None:
         worlds = sorted({w for _, p in runs if p is not None and (w := p.text("WORLD_NAME"))})
         raise AssemblyError(where, "WORLD_NAME", f"no evaluation ran on {track.track_id}; the "
                             f"evaluation parameters name {', '.join(worlds)}", flag="--track")
@@ -151,6 +167,19 @@ def _assemble_folder(root: Path, where: str, overrides: Overrides, default_model
     run_params = [p for _, p in kept if p is not None] or evaluation_params
     described_by = run_params + training_params
 
+    racer = overrides.racer or _first_text(described_by, "RACER_NAME", "DISPLAY_NAME", "CAR_NAME")
+    race_type = _race_type(run_params + training_params, overrides, where)
+    missing = [(field, flag) for field, flag, known in (
+        ("WORLD_NAME", "--track", track is not None),
+        ("RACER_NAME", "--racer", bool(racer)),
+        ("RACE_TYPE", "--race-type", race_type is not None),
+    ) if not known]
+    if missing:
+        raise AssemblyError(where, ", ".join(f for f, _ in missing),
+                            "the run's files do not say", flag=", ".join(f for _, f in missing))
+    assert track is not None and racer and race_type is not None
+    model = overrides.model or _model_name(described_by, default_model)
+
     training = None
     if files.training_metrics:
         training_track = _training_track(_first_text(training_params, "WORLD_NAME"))
@@ -160,17 +189,13 @@ def _assemble_folder(root: Path, where: str, overrides: Overrides, default_model
             training_track,
         )
 
-    racer = overrides.racer or _first_text(described_by, "RACER_NAME", "DISPLAY_NAME", "CAR_NAME")
-    if not racer:
-        raise AssemblyError(where, "RACER_NAME", "no racer name in the run's parameters",
-                            flag="--racer")
-    model = overrides.model or _first_text(described_by, "MODEL_NAME") or default_model
-    race_type = _race_type(run_params, where)
-
     problem = implausible_lap(track.track_id, design.action_space.max_speed, [r for r, _ in kept])
     if problem:
         raise AssemblyError(problem.run.source,
                             f"metrics[{problem.lap_index}].elapsed_time_in_milliseconds", problem.message)
+    for log in logs:
+        if log.params is not None and log.params in described_by:
+            _note_log(reader, log)
     fields = {
         "track": track.track_id,
         "custom_track": track.track is None,
@@ -194,6 +219,76 @@ def _assemble_folder(root: Path, where: str, overrides: Overrides, default_model
         raise AssemblyError(where, "record", f"is {size} bytes, over the "
                             f"{limits.MAX_RECORD_BYTES} limit (too many laps or runs)")
     return record
+
+
+def _refuse_several_runs(files: RunFiles, where: str) -> None:
+    """A folder of several runs' folders (each with its model and its evaluation) is refused:
+    one push is one run."""
+    def top(path: Path) -> str | None:
+        parts = path.relative_to(files.root).parts
+        return parts[0] if len(parts) > 1 else None
+
+    with_model = {top(p) for p in files.model_metadata + files.params}
+    with_evaluation = {top(p) for p in files.evaluation_metrics + files.logs}
+    runs = sorted(name for name in with_model & with_evaluation if name is not None)
+    if len(runs) > 1 and None not in with_model:
+        shown = ", ".join(runs[:10]) + (f" and {len(runs) - 10} more" if len(runs) > 10 else "")
+        raise AssemblyError(where, "", f"holds {len(runs)} runs ({shown}); push one run per path, "
+                            f"e.g. drboard push {where.rstrip('/')}/*/")
+
+
+def _design(files: RunFiles, logs: list[JobLog], params: list[RunParams], reader: _Reader,
+            where: str) -> Design:
+    """The model's design: model_metadata.json (the one the parameters name, when the folder
+    holds different ones), else what the job's logs printed."""
+    hyper: bytes | None
+    hyper_path = shallowest(files.hyperparameters, files.root)
+    if hyper_path is not None:
+        hyper = reader.read(hyper_path, "hyperparameters", limits.MAX_SMALL_FILE_BYTES)
+        hyper_name = files.name(hyper_path)
+    else:
+        printed = next((log for log in logs if log.hyperparameters is not None), None)
+        hyper = json.dumps(printed.hyperparameters).encode() if printed else None
+        hyper_name = printed.name if printed else "hyperparameters.json"
+        if printed:
+            _note_log(reader, printed)
+    metadata_path = _model_metadata(files, params, where)
+    if metadata_path is not None:
+        return load_design(reader.read(metadata_path, "model_metadata", limits.MAX_SMALL_FILE_BYTES),
+                           files.name(metadata_path), hyper, hyper_name)
+    for log in sorted(logs, key=lambda log: not log.is_evaluation):
+        if (metadata := log.metadata()) is not None:
+            _note_log(reader, log)
+            return load_design(metadata, log.name, hyper, hyper_name)
+    raise AssemblyError(where, "model_metadata.json",
+                        "not found in the run folder (nor an action space in its logs)")
+
+
+def _note_log(reader: _Reader, log: JobLog) -> None:
+    if not any(source.path == log.name for source in reader.provenance):
+        role = "simulation_log" if log.is_evaluation or log.episodes else "training_log"
+        reader.note(role, log.name, log.sha256, log.size)
+
+
+def _model_metadata(files: RunFiles, params: list[RunParams], where: str) -> Path | None:
+    distinct: dict[str, Path] = {}
+    for path in sorted(files.model_metadata, key=lambda p: (len(p.parts), p.as_posix())):
+        digest = hashlib.sha256(read_bounded(path, files.name(path),
+                                             limits.MAX_SMALL_FILE_BYTES)).hexdigest()
+        distinct.setdefault(digest, path)
+    if len(distinct) <= 1:
+        return next(iter(distinct.values()), None)
+    keys = [k for p in params if (k := p.text("MODEL_METADATA_FILE_S3_KEY"))]
+    # The key is an S3 path: the file it names is the one matching the most of its tail.
+    named = sorted((len(path.relative_to(files.root).parts), files.name(path), path)
+                   for path in distinct.values()
+                   if any(("/" + key).endswith("/" + files.name(path)) for key in keys))
+    if named and (len(named) == 1 or named[-1][0] > named[-2][0]):
+        return named[-1][2]
+    raise AssemblyError(where, "model_metadata.json",
+                        "the folder holds different ones (" +
+                        ", ".join(files.name(p) for p in distinct.values()) +
+                        "); push the folder of one model")
 
 
 def _only_evaluation(files: RunFiles, evaluation: str, where: str) -> Path:
@@ -227,8 +322,7 @@ def _names_track(params: RunParams, track: ResolvedTrack) -> bool:
 
 
 def _choose_track(runs: list[tuple[EvaluationRun, RunParams | None]],
-                  evaluation_params: list[RunParams], overrides: Overrides,
-                  where: str) -> ResolvedTrack:
+                  evaluation_params: list[RunParams], overrides: Overrides) -> ResolvedTrack | None:
     if overrides.track:
         return _resolve(overrides.track, custom=overrides.custom_track, source="--track")
     matched = [p for _, p in runs if p is not None]
@@ -236,16 +330,15 @@ def _choose_track(runs: list[tuple[EvaluationRun, RunParams | None]],
     candidates = matched or (evaluation_params if len(evaluation_params) == 1 else [])
     worlds = {w for p in candidates if (w := p.text("WORLD_NAME"))}
     if not worlds:
-        raise AssemblyError(where, "WORLD_NAME",
-                            "no evaluation parameters name the track", flag="--track")
+        return None
     resolved = {}
     for world in sorted(worlds):
         source = next(p.name for p in candidates if p.text("WORLD_NAME") == world)
         track = _resolve(world, custom=True, source=source)
         resolved[track.track_id] = track
     if len(resolved) > 1:
-        raise AssemblyError(where, "WORLD_NAME",
-                            f"evaluations on several tracks ({', '.join(sorted(resolved))}); "
+        raise AssemblyError(candidates[0].name if len(candidates) == 1 else "evaluation parameters",
+                            "WORLD_NAME", f"evaluations on several tracks ({', '.join(sorted(resolved))}); "
                             "choose one", flag="--track")
     return next(iter(resolved.values()))
 
@@ -277,6 +370,23 @@ def _first_text(params: list[RunParams], *keys: str) -> str | None:
     return None
 
 
+#: Prefixes that name no model in particular: DeepRacer-for-Cloud's default, and the folders
+#: the console and DeepRacer on AWS keep a model's artifacts in.
+GENERIC_PREFIXES = {"rl-deepracer-sagemaker", "sagemaker-robomaker-artifacts", "sagemaker-artifacts"}
+
+
+def _model_name(params: list[RunParams], folder: str) -> str:
+    """MODEL_NAME, else the model's S3 prefix (DeepRacer-for-Cloud names its models by the
+    prefix), else the folder's (or the archive's) name."""
+    if name := _first_text(params, "MODEL_NAME"):
+        return name
+    prefix = _first_text(params, "MODEL_S3_PREFIX", "SAGEMAKER_SHARED_S3_PREFIX")
+    name = PurePosixPath(prefix.strip("/")).name if prefix else ""
+    if name and name not in GENERIC_PREFIXES:
+        return name
+    return folder
+
+
 def _direction(params: list[RunParams]) -> str | None:
     for p in params:
         clockwise = p.flag("TRACK_DIRECTION_CLOCKWISE")
@@ -285,12 +395,17 @@ def _direction(params: list[RunParams]) -> str | None:
     return None
 
 
-def _race_type(params: list[RunParams], where: str) -> RaceType:
-    text = _first_text(params, "RACE_TYPE")
+def _race_type(params: list[RunParams], overrides: Overrides, where: str) -> RaceType | None:
+    """The race type: --race-type, else the parameters' (a time trial where they leave it out),
+    else unknown: nothing describes the run."""
+    text = overrides.race_type or _first_text(params, "RACE_TYPE")
     if text is None:
-        return RaceType.TIME_TRIAL
+        return RaceType.TIME_TRIAL if params else None
     try:
-        return RaceType(text.upper())
+        return RaceType(text.strip().upper())
     except ValueError:
-        source = next((p.name for p in params if p.text("RACE_TYPE")), where)
-        raise AssemblyError(source, "RACE_TYPE", f"unknown race type {text!r}") from None
+        source = "--race-type" if overrides.race_type else next(
+            (p.name for p in params if p.text("RACE_TYPE")), where)
+        choices = ", ".join(RaceType)
+        raise AssemblyError(source, "" if overrides.race_type else "RACE_TYPE",
+                            f"unknown race type {text!r} (one of {choices})") from None

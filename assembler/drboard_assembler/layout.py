@@ -30,6 +30,7 @@ class RunFiles:
     params: list[Path] = field(default_factory=list)
     training_metrics: list[Path] = field(default_factory=list)
     evaluation_metrics: list[Path] = field(default_factory=list)
+    logs: list[Path] = field(default_factory=list)
 
     def name(self, path: Path) -> str:
         """The path as the racer sees it: relative to the run folder."""
@@ -91,7 +92,9 @@ def _classify(found: RunFiles, path: Path) -> None:
     name = path.name
     parent = path.parent.name.lower()
     under_metrics = path.parent.parent.name.lower() == "metrics"
-    if name == "model_metadata.json":
+    if name.lower().endswith(".log"):
+        found.logs.append(path)
+    elif name == "model_metadata.json":
         found.model_metadata.append(path)
     elif name == "hyperparameters.json":
         found.hyperparameters.append(path)

@@ -61,7 +61,11 @@ class RunParams:
 
 
 def load_params(data: bytes, name: str) -> RunParams:
-    values = parse_yaml(data, name)
+    return params_from_values(parse_yaml(data, name), name)
+
+
+def params_from_values(values: dict[Any, Any], name: str) -> RunParams:
+    """Run parameters from a mapping: a params YAML's, or the one a job printed in its log."""
     for key in values:
         if not isinstance(key, str):
             raise AssemblyError(name, str(key), "keys must be names")

@@ -260,7 +260,7 @@ class TrainingSummary(Strict):
 class SourceFile(Strict):
     role: Literal[
         "model_metadata", "hyperparameters", "training_params", "evaluation_params",
-        "training_metrics", "evaluation_metrics",
+        "training_metrics", "evaluation_metrics", "simulation_log", "training_log",
     ]
     path: Text
     sha256: Sha256

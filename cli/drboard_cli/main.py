@@ -131,16 +131,21 @@ def overrides_options(command: Callable[..., Any]) -> Callable[..., Any]:
                      help="Take --track exactly as the name of a track of your own."),
         click.option("--racer", help="Your racer alias, when the files do not say or say otherwise."),
         click.option("--model", help="The model name (default: from the files, else the folder)."),
+        click.option("--race-type", type=click.Choice([t.value for t in RaceType],
+                                                      case_sensitive=False),
+                     help="The race type, when the files do not say or say otherwise (a run "
+                          "with parameters that leave it out is a time trial)."),
     ]):
         command = option(command)
     return command
 
 
 def _overrides(track: str | None, custom_track: bool, racer: str | None,
-               model: str | None) -> Overrides:
+               model: str | None, race_type: str | None) -> Overrides:
     if custom_track and not track:
         raise click.UsageError("--custom-track needs --track NAME")
-    return Overrides(track=track, racer=racer, model=model, custom_track=custom_track)
+    return Overrides(track=track, racer=racer, model=model, custom_track=custom_track,
+                     race_type=race_type)
 
 
 @cli.command(name="assemble")
@@ -149,7 +154,7 @@ def _overrides(track: str | None, custom_track: bool, racer: str | None,
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="Save the record to this file instead of printing it.")
 def assemble_command(path: Path, track: str | None, custom_track: bool, racer: str | None,
-                     model: str | None, output: Path | None) -> None:
+                     model: str | None, race_type: str | None, output: Path | None) -> None:
     """Read a run folder (or a .tar.gz of one) into a record. Nothing is sent.
 
     PATH holds the model's files as DeepRacer-for-Cloud, DeepRacer on AWS or the old console
@@ -157,7 +162,7 @@ def assemble_command(path: Path, track: str | None, custom_track: bool, racer: s
     training and evaluation metrics.
     """
     with edge():
-        record = assemble(path, _overrides(track, custom_track, racer, model))
+        record = assemble(path, _overrides(track, custom_track, racer, model, race_type))
         text = record.model_dump_json(indent=2) + "\n"
         if output:
             output.write_text(text, "utf-8")
@@ -184,8 +189,8 @@ def assemble_command(path: Path, track: str | None, custom_track: bool, racer: s
                    "starts.")
 @pass_context
 def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track: bool,
-         racer: str | None, model: str | None, board_id: str | None, dry_run: bool, watch: bool,
-         interval: float, only_new: bool) -> None:
+         racer: str | None, model: str | None, race_type: str | None, board_id: str | None,
+         dry_run: bool, watch: bool, interval: float, only_new: bool) -> None:
     """Assemble each run folder and submit it to the board.
 
     Every path is read and checked first: if one is bad, nothing is pushed. Prints each run's
@@ -198,7 +203,7 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
     retried; an evaluation the board refuses is reported and skipped. Ctrl-C stops.
     """
     with edge():
-        overrides = _overrides(track, custom_track, racer, model)
+        overrides = _overrides(track, custom_track, racer, model, race_type)
         if watch:
             _watch(ctx, paths, overrides, board_id, interval, only_new, dry_run)
             return

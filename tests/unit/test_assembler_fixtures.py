@@ -66,24 +66,23 @@ def test_console_record_round_trips(console_run: Path) -> None:
     assert Record.model_validate_json(record.model_dump_json()) == record
 
 
-def test_drfc_folder_without_params_asks_for_the_track(drfc_run: Path) -> None:
+def test_drfc_folder_without_params_asks_for_every_missing_fact_at_once(drfc_run: Path) -> None:
     with pytest.raises(AssemblyError) as caught:
         assemble(drfc_run)
-    message = str(caught.value)
-    assert "drfc-2022-sample" in message
-    assert "WORLD_NAME" in message
-    assert "--track" in message
+    assert str(caught.value) == (f"{drfc_run}: WORLD_NAME, RACER_NAME, RACE_TYPE: the run's files "
+                                 "do not say (use --track, --racer, --race-type)")
 
 
 def test_drfc_folder_with_a_track_but_no_racer_asks_for_the_racer(drfc_run: Path) -> None:
     with pytest.raises(AssemblyError) as caught:
         assemble(drfc_run, Overrides(track="reInvent2019"))
-    assert "RACER_NAME" in str(caught.value)
-    assert "--racer" in str(caught.value)
+    assert "RACER_NAME, RACE_TYPE: " in str(caught.value)
+    assert "(use --racer, --race-type)" in str(caught.value)
 
 
 def test_drfc_folder_with_track_and_racer_from_the_command_line(drfc_run: Path) -> None:
-    record = assemble(drfc_run, Overrides(track="reInvent2019", racer="Sample Racer"))
+    record = assemble(drfc_run, Overrides(track="reInvent2019", racer="Sample Racer",
+                                          race_type="time_trial"))
 
     assert record.track == "reInvent2019_track"
     assert record.racer == "Sample Racer"
