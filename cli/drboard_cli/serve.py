@@ -10,6 +10,11 @@ Anyone else on the network gets 403 ``NotAuthorized`` before the request is even
 address is the connection's own; a forwarding header cannot claim loopback. (Behind a reverse
 proxy on the same computer every request would look local: do not put one in front of `serve`.)
 
+``GET /boards/{board}/events`` streams the board's changes as Server-Sent Events (answered here:
+the cloud board's pages poll with ``If-None-Match`` instead): an ``event: board`` whose data is the
+board's page tag each time the standings, the settings or the status change, ``missing`` while
+no board has that id yet.
+
 Racers on the network sign in with the join code `serve` prints (``POST /join``, answered here
 and not by the routes): each gets a token of their own, sent as a bearer token, which this server
 turns into the caller of the request (see :mod:`drboard_cli.joins`). Unsigned pushes are refused.
@@ -26,7 +31,7 @@ import uuid
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import TYPE_CHECKING, Any
-from urllib.parse import parse_qsl, urlsplit
+from urllib.parse import parse_qsl, unquote, urlsplit
 
 from drboard_functions.errors import DomainError, InvalidQuery, NotAuthorized
 from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
@@ -40,6 +45,10 @@ if TYPE_CHECKING:
     from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
 
 MAX_BODY_BYTES = 1024 * 1024  # the routes apply the record's own, smaller bound
+STREAM_POLL_S = 0.5  # how often an event stream looks at its board (one small SQLite read)
+STREAM_KEEPALIVE_S = 15.0
+MAX_STREAMS = 64
+_EVENTS_PATH = re.compile(r"^/boards/([^/]+)/events$")
 
 _log = Console(stderr=True, highlight=False)
 
@@ -135,6 +144,20 @@ class BoardServer(ThreadingHTTPServer):
         # One request at a time through the resolvers: they keep per-request context, and the
         # embedded SQLite board has a single connection.
         self.lock = threading.Lock()
+        self.closing = threading.Event()  # tells the event streams to end
+        self.streams = threading.BoundedSemaphore(MAX_STREAMS)
+
+    def server_close(self) -> None:
+        self.closing.set()
+        super().server_close()
+
+    def board_tag(self, board_id: str) -> str:
+        """The board's page tag, or ``missing`` when there is no such board (yet)."""
+        with self.lock:
+            try:
+                return self.service.board_tag(board_id)
+            except DomainError:
+                return "missing"
 
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
         from drboard_functions.routes import canonical_event
@@ -212,6 +235,10 @@ class _Handler(BaseHTTPRequestHandler):
         self._dispatch()
 
     def _dispatch(self) -> None:
+        events = _EVENTS_PATH.match(urlsplit(self.path).path) if self.command == "GET" else None
+        if events:
+            self._stream(unquote(events[1]))
+            return
         length = int(self.headers.get("Content-Length") or 0)
         if length > MAX_BODY_BYTES:
             self._reply(413, {"content-type": "application/json"},
@@ -232,6 +259,38 @@ class _Handler(BaseHTTPRequestHandler):
         for name, values in (result.get("multiValueHeaders") or {}).items():
             headers[name] = ", ".join(values)
         self._reply(int(result.get("statusCode", 200)), headers, data)
+
+    def _stream(self, board_id: str) -> None:
+        """Server-Sent Events: the board's tag now, then each time it changes, until the client
+        goes or the server stops."""
+        self.close_connection = True
+        if not self.server.streams.acquire(blocking=False):
+            self._reply(503, {"content-type": "application/json", "retry-after": "5"},
+                        json.dumps({"message": "too many open event streams"}).encode())
+            return
+        try:
+            self.send_response(200)
+            for name, value in (("Content-Type", "text/event-stream"), ("Cache-Control", "no-cache"),
+                                ("X-Content-Type-Options", "nosniff")):
+                self.send_header(name, value)
+            self.end_headers()
+            self.wfile.write(b"retry: 2000\n\n")
+            sent, quiet = None, 0.0
+            while not self.server.closing.is_set():
+                tag = self.server.board_tag(board_id)
+                if tag != sent:
+                    self.wfile.write(f"event: board\ndata: {tag}\n\n".encode())
+                    sent, quiet = tag, 0.0
+                elif quiet >= STREAM_KEEPALIVE_S:
+                    self.wfile.write(b": keep-alive\n\n")
+                    quiet = 0.0
+                self.wfile.flush()
+                self.server.closing.wait(STREAM_POLL_S)
+                quiet += STREAM_POLL_S
+        except (BrokenPipeError, ConnectionResetError, TimeoutError):
+            pass  # the client went away
+        finally:
+            self.server.streams.release()
 
     def _reply(self, status: int, headers: dict[str, str], data: bytes) -> None:
         self.send_response(status)

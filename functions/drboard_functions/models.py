@@ -297,6 +297,8 @@ class BoardView(Model):
     cooldown_s: int
     max_submissions: int | None
     participants: int
+    version: int = Field(0, description="Goes up with every change to the standings or the "
+                                        "settings.")
 
 
 class BoardPage(Model):

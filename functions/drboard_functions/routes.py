@@ -28,6 +28,7 @@ OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the c
 
 from __future__ import annotations
 
+import hashlib
 import json
 import sys
 from collections.abc import Callable, Sequence
@@ -51,7 +52,7 @@ from aws_lambda_powertools.event_handler.openapi.exceptions import (
     RequestUnsupportedContentType,
     RequestValidationError,
 )
-from aws_lambda_powertools.event_handler.openapi.params import Body, Path, Query
+from aws_lambda_powertools.event_handler.openapi.params import Body, Header, Path, Query
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import __version__ as assembler_version
 from drboard_assembler import limits
@@ -99,7 +100,7 @@ from .models import (
     RacerSummary,
     RacerView,
 )
-from .service import MAX_CURSOR_CHARS, LeaderboardService
+from .service import MAX_CURSOR_CHARS, LeaderboardService, page_tag
 
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
@@ -118,6 +119,11 @@ PAGE_HEADERS = {
                                "form-action 'none'; frame-ancestors 'none'",
     "X-Content-Type-Options": "nosniff",
     "Cache-Control": "no-store",
+}
+#: A live board page: its one inline script, allowed by hash, and requests to its own origin.
+LIVE_PAGE_HEADERS = {
+    "Content-Security-Policy": PAGE_HEADERS["Content-Security-Policy"]
+    + f"; script-src '{web.LIVE_SCRIPT_HASH}'; connect-src 'self'",
 }
 SIGV4 = "sigv4"
 #: The tag of every organiser route: IAM-signed in the cloud, loopback only on `drboard serve`.
@@ -191,6 +197,8 @@ RacerAlias = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
 Limit = Annotated[int, Query(ge=1, le=MAX_PAGE, description="How many entries (1..500).")]
 Cursor = Annotated[str | None, Query(max_length=MAX_CURSOR_CHARS,
                                      description="`next_cursor` of the previous page.")]
+IfNoneMatch = Annotated[str | None, Header(max_length=1024, description="The `ETag` of the copy "
+                                          "the client holds.")]
 OnBoard = Annotated[str | None, Query(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
                                       description="Only this board (default: every board).")]
 
@@ -428,15 +436,37 @@ def list_boards(service: Service) -> BoardList:
     "/boards/<board>",
     summary="A board's standings",
     description="The board and its entries in rank order, `limit` at a time; pass the answer's "
-                "`next_cursor` as `cursor` for the next page.",
+                "`next_cursor` as `cursor` for the next page. The answer's `ETag` changes with "
+                "the standings: send it back as `If-None-Match` and an unchanged board answers "
+                "`304 Not Modified` with no body, after a single read (a screen can poll every "
+                "few seconds).",
     tags=["boards"],
     responses={200: _json_response("The board and one page of its entries.", BoardPage),
+               304: {"description": "Unchanged since the `ETag` sent in `If-None-Match`."},
                400: _error_response("A bad limit or cursor."),
                404: _error_response("No such board.")},
 )
 def get_board(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
-              cursor: Cursor = None) -> BoardPage:
-    return service.board_page(_segment(board), limit=limit, cursor=cursor or None)
+              cursor: Cursor = None, if_none_match: IfNoneMatch = None) -> Response[Any]:
+    board_id = _segment(board)
+    if if_none_match:
+        etag = page_etag(service.board_tag(board_id), limit, cursor)
+        if etag in (tag.strip() for tag in if_none_match.split(",")):
+            return Response(status_code=HTTPStatus.NOT_MODIFIED, body="", headers=_etag_headers(etag))
+    page = service.board_page(board_id, limit=limit, cursor=cursor or None)
+    return Response(status_code=HTTPStatus.OK, content_type=content_types.APPLICATION_JSON,
+                    body=page, headers=_etag_headers(page_etag(page_tag(page.board), limit, cursor)))
+
+
+def page_etag(tag: str, limit: int, cursor: str | None) -> str:
+    """The ETag of one page of a board: the board's page tag, the page asked for, and the API's
+    version (a new release may answer differently)."""
+    query = hashlib.sha256(f"{limit}|{cursor or ''}".encode()).hexdigest()[:12]
+    return f'"{api_version()}.{tag}.{query}"'
+
+
+def _etag_headers(etag: str) -> dict[str, str]:
+    return {"ETag": etag, "Cache-Control": "no-cache"}
 
 
 @pull_router.get(
@@ -512,9 +542,18 @@ def index_page(service: Service) -> Response[str]:
                404: _error_response("No such board.")},
 )
 def board_view(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
-               cursor: Cursor = None) -> Response[str]:
-    page = service.board_page(_segment(board), limit=limit, cursor=cursor or None)
-    return _page(web.board_page(page))
+               cursor: Cursor = None, if_none_match: IfNoneMatch = None) -> Response[str]:
+    board_id = _segment(board)
+    try:
+        if if_none_match:
+            etag = page_etag("view." + service.board_tag(board_id), limit, cursor)
+            if etag in (tag.strip() for tag in if_none_match.split(",")):
+                return _page("", HTTPStatus.NOT_MODIFIED, _etag_headers(etag))
+        page = service.board_page(board_id, limit=limit, cursor=cursor or None)
+    except BoardNotFound:  # a screen set up before the first push waits for the board
+        return _page(web.waiting_page(board_id), HTTPStatus.NOT_FOUND, LIVE_PAGE_HEADERS)
+    etag = page_etag("view." + page_tag(page.board), limit, cursor)
+    return _page(web.board_page(page, etag), headers=LIVE_PAGE_HEADERS | _etag_headers(etag))
 
 
 def _page(html: str, status: int = HTTPStatus.OK,

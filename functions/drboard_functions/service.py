@@ -317,6 +317,11 @@ class LeaderboardService:
             next_cursor=previous.encode() if more and previous else None,
         )
 
+    def board_tag(self, board_id: str) -> str:
+        """The board's :func:`page_tag`, in one read: unchanged, its pages are too."""
+        stored = self._live(board_id, self.store.get_board(board_id))
+        return page_tag(_board_view(stored, self.clock()))
+
     def racer(self, board_id: str, racer: str) -> RacerView:
         stored = self._require_board(board_id)
         key = racer_key(racer)
@@ -461,6 +466,8 @@ class LeaderboardService:
         updated = _valid_board(**(board.model_dump() | updates | {"rules": rules.model_dump()}))
         if rescores and stored.participants:
             raise BoardLocked(_LOCKED.format(board_id))
+        if updated == board:  # nothing changes: nothing is written, the version stays
+            return _board_view(stored, self.clock())
         view = self._save(updated, only_if_empty=rescores)
         self._audit(board_id, "update", caller,
                     detail=changes.model_dump_json(exclude_unset=True))
@@ -837,7 +844,14 @@ def _board_view(stored: StoredBoard, now: datetime) -> BoardView:
         cooldown_s=board.cooldown_s,
         max_submissions=board.max_submissions,
         participants=stored.participants,
+        version=stored.version,
     )
+
+
+def page_tag(board: BoardView) -> str:
+    """What a board's page depends on besides its query: its version, and its status (which
+    the clock moves without a write)."""
+    return f"{board.version}.{board.status.value}"
 
 
 def _entry_view(entry: Entry, rank: int, leader: Entry | None) -> EntryView:

@@ -95,6 +95,12 @@ def lap(ms: int) -> list[LapSpec]:
     return [(ms, 100)]
 
 
+def version(store: BoardStore, board_id: str = TRACK) -> int:
+    stored = store.get_board(board_id)
+    assert stored is not None
+    return stored.version
+
+
 def participants(store: BoardStore, board_id: str = TRACK) -> int:
     stored = store.get_board(board_id)
     assert stored is not None
@@ -495,6 +501,34 @@ class StoreContract:
         store.create_board(make_board("Oval_track", track="Oval_track"))
         empty, none = store.front_page("Oval_track", 5)
         assert empty is not None and empty.participants == 0 and none == []
+
+    # ---- the board's version ----------------------------------------------------------------
+
+    def test_every_change_to_the_standings_bumps_the_version(self, store: BoardStore) -> None:
+        store.create_board(make_board())
+        seen = [version(store)]
+        submit(store, make_record("Ada", lap(9000)), at(0))  # a new entry
+        seen.append(version(store))
+        submit(store, make_record("Ada", lap(8000), model="faster"), at(1))  # an improvement
+        seen.append(version(store))
+        store.update_board(make_board(title="Renamed"))  # the settings
+        seen.append(version(store))
+        removed = store.remove_entry(TRACK, "ada")
+        seen.append(version(store))
+        assert removed is not None
+        store.restore_entry(removed)
+        seen.append(version(store))
+        assert seen == sorted(set(seen)), seen  # strictly increasing
+        assert [s.version for s in store.list_boards()] == [seen[-1]]
+        assert store.front_page(TRACK, 1)[0] == store.get_board(TRACK)
+
+    def test_what_leaves_the_standings_alone_leaves_the_version(self, store: BoardStore) -> None:
+        submit(store, make_record("Ada", lap(8000)), at(0))
+        before = version(store)
+        assert not submit(store, make_record("Ada", lap(9000), model="slower"), at(1)).improved
+        assert submit(store, make_record("Ada", lap(8000)), at(0)).duplicate
+        assert store.remove_entry(TRACK, "nobody") is None
+        assert version(store) == before
 
     # ---- copies, moderation, audit and aliases ----------------------------------------------
 

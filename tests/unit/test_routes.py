@@ -17,6 +17,7 @@ import pytest
 from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, DependencyResolutionError
 from drboard_assembler import limits
 from drboard_assembler.record import Record
+from drboard_functions import web
 from drboard_functions.errors import (
     AliasTaken,
     Banned,
@@ -443,7 +444,8 @@ def test_the_board_page_shows_times_gaps_and_designs(client: Client) -> None:
 def test_the_board_page_escapes_what_racers_typed(client: Client) -> None:
     client.push(make_record("<script>alert(1)</script>", lap(12000), model='m"><img src=x>'))
     page = client.get(f"/boards/{TRACK}/view")["body"]
-    assert "<script>" not in page and "<img" not in page
+    assert page.count("<script") == 1 and f"<script>{web.LIVE_SCRIPT}</script>" in page
+    assert "<img" not in page
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page
     assert "m&quot;&gt;&lt;img src=x&gt;" in page
 
@@ -472,12 +474,35 @@ def test_the_board_page_links_to_its_next_page(client: Client) -> None:
     assert "Cleo" not in first
 
 
-def test_a_missing_board_page_is_an_html_404(client: Client) -> None:
+def test_a_missing_board_page_is_an_html_404_that_waits_for_the_board(client: Client) -> None:
     response = client.get("/boards/%3Cscript%3E/view")
     assert response["statusCode"] == 404
     assert response["headers"]["Content-Type"] == "text/html; charset=utf-8"
-    assert "<script>" not in response["body"]
-    assert "&#x27;&lt;script&gt;&#x27;" in response["body"]
+    assert response["body"].count("<script") == 1
+    assert "&lt;script&gt;" in response["body"]
+    assert 'data-missing="1"' in response["body"] and "first push" in response["body"]
+
+
+def test_the_live_page_allows_only_its_own_script(client: Client) -> None:
+    client.push(make_record("Ada", lap(12000)))
+    response = client.get(f"/boards/{TRACK}/view")
+    policy = response["headers"]["Content-Security-Policy"]
+    assert f"script-src '{web.LIVE_SCRIPT_HASH}'" in policy and "connect-src 'self'" in policy
+    assert "default-src 'none'" in policy
+    assert 'data-racer="Ada"' in response["body"]
+
+
+def test_the_live_page_answers_304_while_the_board_is_unchanged(client: Client) -> None:
+    client.push(make_record("Ada", lap(12000)))
+    first = client.get(f"/boards/{TRACK}/view")
+    etag = first["headers"]["ETag"]
+    assert f'data-etag="{etag.replace(chr(34), "&quot;")}"' in first["body"]
+    same = client.request("GET", f"/boards/{TRACK}/view", headers={"if-none-match": etag})
+    assert same["statusCode"] == 304 and same["body"] == ""
+    client.push(make_record("Bob", lap(11000)))
+    changed = client.request("GET", f"/boards/{TRACK}/view", headers={"if-none-match": etag})
+    assert changed["statusCode"] == 200 and changed["headers"]["ETag"] != etag
+    assert changed["body"].index('data-racer="Bob"') < changed["body"].index('data-racer="Ada"')
 
 
 # ---- helpers ----------------------------------------------------------------------------------
@@ -1019,3 +1044,77 @@ def test_only_organisers_manage_boards(client: Client, authorizer: dict[str, Any
     assert response["statusCode"] == 403
     assert json.loads(response["body"])["error"] == "NotAuthorized"
     assert client.get("/boards/spring-cup")["statusCode"] == 404
+
+
+# ---- live boards: ETag and 304 -----------------------------------------------------------------
+
+
+class CountingStore(SqliteStore):
+    """The embedded store, counting the reads a request makes."""
+
+    reads = 0
+
+    def get_board(self, board_id: str) -> Any:
+        self.reads += 1
+        return super().get_board(board_id)
+
+    def front_page(self, board_id: str, limit: int) -> Any:
+        self.reads += 1
+        return super().front_page(board_id, limit)
+
+    def top(self, board_id: str, limit: int, after: str | None = None) -> Any:
+        self.reads += 1
+        return super().top(board_id, limit, after)
+
+
+def test_an_unchanged_board_answers_304_after_one_read(app: APIGatewayHttpResolver) -> None:
+    store = CountingStore(":memory:")
+    client = Client(app, LeaderboardService(store, clock=Clock()))
+    client.push(make_record("Ada", laps=lap(12000)))
+    first = client.get(f"/boards/{TRACK}")
+    etag = first["headers"]["ETag"]
+    assert first["statusCode"] == 200 and first["headers"]["Cache-Control"] == "no-cache"
+    store.reads = 0
+    again = client.request("GET", f"/boards/{TRACK}", headers={"if-none-match": etag})
+    assert again["statusCode"] == 304 and again["body"] == "" and again["headers"]["ETag"] == etag
+    assert store.reads == 1
+
+
+def test_a_push_that_changes_the_standings_changes_the_etag(client: Client) -> None:
+    client.push(make_record("Ada", laps=lap(12000)))
+    etag = client.get(f"/boards/{TRACK}")["headers"]["ETag"]
+    client.push(make_record("Bob", laps=lap(13000)))
+    changed = client.request("GET", f"/boards/{TRACK}", headers={"if-none-match": etag})
+    assert changed["statusCode"] == 200
+    assert [e["racer"] for e in body(changed)["entries"]] == ["Ada", "Bob"]
+    assert changed["headers"]["ETag"] != etag
+    slower = client.push(make_record("Bob", laps=lap(14000), model="slower"))
+    assert slower["statusCode"] == 201
+    unchanged = client.request("GET", f"/boards/{TRACK}",
+                               headers={"if-none-match": changed["headers"]["ETag"]})
+    assert unchanged["statusCode"] == 304
+
+
+def test_each_page_of_a_board_has_its_own_etag(client: Client) -> None:
+    for racer, ms in (("Ada", 12000), ("Bob", 13000)):
+        client.push(make_record(racer, laps=lap(ms)))
+    one = client.get(f"/boards/{TRACK}", limit="1")
+    two = client.get(f"/boards/{TRACK}", limit="2")
+    assert one["headers"]["ETag"] != two["headers"]["ETag"]
+    stale = client.request("GET", f"/boards/{TRACK}", query={"limit": "2"},
+                           headers={"if-none-match": one["headers"]["ETag"]})
+    assert stale["statusCode"] == 200
+
+
+def test_a_board_closing_by_the_clock_changes_the_etag(client: Client) -> None:
+    create_cup(client, closes_at=(T0 + timedelta(hours=1)).isoformat())
+    client.push(make_record("Ada", laps=lap(12000)), board=CUP)
+    etag = client.get(f"/boards/{CUP}")["headers"]["ETag"]
+    client.clock.advance(2 * 3600)
+    after = client.request("GET", f"/boards/{CUP}", headers={"if-none-match": etag})
+    assert after["statusCode"] == 200 and body(after)["board"]["status"] == "CLOSED"
+
+
+def test_if_none_match_on_a_board_that_does_not_exist_is_404(client: Client) -> None:
+    response = client.request("GET", "/boards/nowhere", headers={"if-none-match": '"x"'})
+    assert response["statusCode"] == 404

@@ -105,3 +105,19 @@ def test_opening_a_new_file_waits_for_another_writer(tmp_path: Path) -> None:
     finally:
         timer.join()
         other.close()
+
+
+def test_a_board_file_from_before_versions_opens_and_counts_from_zero(tmp_path: Path) -> None:
+    path = tmp_path / "old.db"
+    old = sqlite3.connect(path)
+    old.execute("CREATE TABLE boards (board_id TEXT PRIMARY KEY, board TEXT NOT NULL, "
+                "participants INTEGER NOT NULL DEFAULT 0)")
+    old.execute("INSERT INTO boards VALUES (?, ?, 0)", (TRACK, make_board().model_dump_json()))
+    old.commit()
+    old.close()
+    store = SqliteStore(path)
+    stored = store.get_board(TRACK)
+    assert stored is not None and stored.version == 0
+    submit(store, make_record("Ada"), at(1))
+    stored = store.get_board(TRACK)
+    assert stored is not None and stored.version == 1 and stored.participants == 1

@@ -22,6 +22,9 @@ from ..models import (
 class StoredBoard(NamedTuple):
     board: Board
     participants: int
+    # Goes up with every change to the standings or the settings, in the same write: a client
+    # that saw this version has seen the board as it is.
+    version: int = 0
 
 
 class LimitReached(Exception):
@@ -70,8 +73,8 @@ class BoardStore(Protocol):
         """Create the board unless it exists; return what is stored."""
 
     def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
-        """Replace an existing board's settings (its id stays). With ``only_if_empty``, raise
-        BoardHasEntries when the board has any entry."""
+        """Replace an existing board's settings (its id stays) and bump its version. With
+        ``only_if_empty``, raise BoardHasEntries when the board has any entry."""
 
     def list_boards(self) -> list[StoredBoard]:
         """Every board, deleted ones included, ordered by id."""
@@ -83,7 +86,8 @@ class BoardStore(Protocol):
         """Atomically: store the submission unless its id is already on the board (a duplicate,
         which changes nothing and is never refused), and make ``entry`` the racer's entry if it
         has a strictly lower rank key than the current one (a better score, or an equal score
-        achieved earlier). With ``limits``, a new submission is refused with LimitReached, and
+        achieved earlier); a changed entry bumps the board's version in the same write. With
+        ``limits``, a new submission is refused with LimitReached, and
         nothing written, when the racer's last one is under ``cooldown_s`` old or they have
         reached ``max_submissions``. Each of ``fingerprints`` (its evaluations' content) is
         claimed on the board for the racer: one already held by another racer refuses the push
@@ -122,10 +126,11 @@ class BoardStore(Protocol):
     # ---- moderation and audit ---------------------------------------------------------------
 
     def remove_entry(self, board_id: str, racer_key: str) -> Entry | None:
-        """Take the racer's entry off the board (its submissions stay); the removed entry."""
+        """Take the racer's entry off the board (its submissions stay), bumping the board's
+        version; the removed entry."""
 
     def restore_entry(self, entry: Entry) -> None:
-        """Put back an entry for a racer who has none on the board."""
+        """Put back an entry for a racer who has none on the board, bumping its version."""
 
     def append_audit(self, event: AuditEvent) -> None:
         """Add one event to its board's audit trail (append-only)."""

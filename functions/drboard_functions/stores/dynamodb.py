@@ -2,9 +2,10 @@
 
 Items of a board share its partition (``board``); the sort key ``sk`` tells them apart:
 
-- ``#BOARD``: the board (its JSON in ``data``, ``participants``, and ``board_kind="board"`` for
-  the sparse ``boards`` index that lists boards). Its ``rank_key`` is ``#BOARD`` too, which sorts
-  before every entry's, so one Query of ``by_rank`` reads the board and its first page together;
+- ``#BOARD``: the board (its JSON in ``data``, ``participants``, ``board_version``, and
+  ``board_kind="board"`` for the sparse ``boards`` index that lists boards). Its ``rank_key``
+  is ``#BOARD`` too, which sorts before every entry's, so one Query of ``by_rank`` reads the
+  board and its first page together;
 - ``R#<racer_key>``: a racer's entry, their best (``data``, ``score_key``, and ``rank_key`` for
   the sparse local index ``by_rank``: the top N is one Query reading N items);
 - ``P#<racer_key>``: the racer's tally on the board (``submissions``, ``last_at``), which the
@@ -183,14 +184,15 @@ class DynamoDbStore:
 
     def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
         condition = "attribute_exists(sk)"
-        values: dict[str, AttributeValueTypeDef] = {":data": _s(board.model_dump_json())}
+        values: dict[str, AttributeValueTypeDef] = {":data": _s(board.model_dump_json()),
+                                                    ":one": {"N": "1"}}
         if only_if_empty:
             condition += " AND participants = :none"
             values[":none"] = {"N": "0"}
         try:
             self.client.update_item(
                 TableName=self.table, Key={"board": _s(board.board_id), "sk": _s(BOARD_SK)},
-                UpdateExpression="SET #data = :data", ConditionExpression=condition,
+                UpdateExpression="SET #data = :data ADD board_version :one", ConditionExpression=condition,
                 ExpressionAttributeNames={"#data": "data"}, ExpressionAttributeValues=values)
         except ClientError as error:
             if _code(error) != "ConditionalCheckFailedException":
@@ -243,11 +245,12 @@ class DynamoDbStore:
             if current is None:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
                                       "ConditionExpression": "attribute_not_exists(sk)"}})
-                items.append(self._participants(board_id, +1))
+                items.append(self._board_change(board_id, +1))
             elif improves:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
                                       "ConditionExpression": "rank_key > :new",
                                       "ExpressionAttributeValues": {":new": _s(entry.rank_key)}}})
+                items.append(self._board_change(board_id, 0))
             # else: not better. The entry stays as it is (entries only ever improve).
             try:
                 self.client.transact_write_items(TransactItems=items)
@@ -338,7 +341,7 @@ class DynamoDbStore:
                                 "Key": {"board": _s(board_id), "sk": _s(entry_sk(racer_key))},
                                 "ConditionExpression": "rank_key = :seen",
                                 "ExpressionAttributeValues": {":seen": _s(current.rank_key)}}},
-                    self._participants(board_id, -1)])
+                    self._board_change(board_id, -1)])
             except ClientError as error:
                 if _code(error) != "TransactionCanceledException":
                     raise
@@ -351,17 +354,18 @@ class DynamoDbStore:
             self.client.transact_write_items(TransactItems=[
                 {"Put": {"TableName": self.table, "Item": entry_item(entry),
                          "ConditionExpression": "attribute_not_exists(sk)"}},
-                self._participants(entry.board_id, +1)])
+                self._board_change(entry.board_id, +1)])
         except ClientError as error:
             if _code(error) != "TransactionCanceledException":
                 raise  # cancelled: the racer has an entry again, from a push meanwhile
 
-    def _participants(self, board_id: str, change: int) -> TransactWriteItemTypeDef:
+    def _board_change(self, board_id: str, change: int) -> TransactWriteItemTypeDef:
+        """The board's number of racers changed by ``change``, and its version bumped."""
         return {"Update": {
             "TableName": self.table, "Key": {"board": _s(board_id), "sk": _s(BOARD_SK)},
-            "UpdateExpression": "SET participants = participants + :change",
+            "UpdateExpression": "SET participants = participants + :change ADD board_version :one",
             "ConditionExpression": "attribute_exists(sk)",
-            "ExpressionAttributeValues": {":change": {"N": str(change)}}}}
+            "ExpressionAttributeValues": {":change": {"N": str(change)}, ":one": {"N": "1"}}}}
 
     def append_audit(self, event: AuditEvent) -> None:
         self.client.put_item(TableName=self.table, Item=audit_item(event),
@@ -461,7 +465,7 @@ class DynamoDbStore:
             "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
             "KeyConditionExpression": "board = :board",
             "ExpressionAttributeValues": {":board": _s(board_id)},
-            "ProjectionExpression": "sk, #data, participants",
+            "ProjectionExpression": "sk, #data, participants, board_version",
             "ExpressionAttributeNames": {"#data": "data"},
         }
         items = self._query(request, limit=limit + 1)
@@ -551,7 +555,8 @@ class DynamoDbStore:
 
 
 def _board(item: Item) -> StoredBoard:
-    return StoredBoard(Board.model_validate_json(item["data"]["S"]), int(item["participants"]["N"]))
+    return StoredBoard(Board.model_validate_json(item["data"]["S"]), int(item["participants"]["N"]),
+                       int(item.get("board_version", {"N": "0"})["N"]))
 
 
 def _code(error: ClientError) -> str:

@@ -39,7 +39,8 @@ SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
     board_id     TEXT PRIMARY KEY,
     board        TEXT NOT NULL,
-    participants INTEGER NOT NULL DEFAULT 0
+    participants INTEGER NOT NULL DEFAULT 0,
+    version      INTEGER NOT NULL DEFAULT 0
 );
 CREATE TABLE IF NOT EXISTS entries (
     board_id  TEXT NOT NULL,
@@ -95,6 +96,9 @@ class SqliteStore:
         with self._write():
             for statement in filter(str.strip, SCHEMA.split(";")):
                 self._db.execute(statement)
+            columns = {row[1] for row in self._db.execute("PRAGMA table_info(boards)")}
+            if "version" not in columns:  # a board file from before versions
+                self._db.execute("ALTER TABLE boards ADD COLUMN version INTEGER NOT NULL DEFAULT 0")
 
     def _enable_wal(self) -> None:
         # Switching a new file to WAL needs a moment with no other writer, and SQLite does not
@@ -126,7 +130,7 @@ class SqliteStore:
 
     def get_board(self, board_id: str) -> StoredBoard | None:
         row = self._db.execute(
-            "SELECT board, participants FROM boards WHERE board_id = ?", (board_id,)
+            "SELECT board, participants, version FROM boards WHERE board_id = ?", (board_id,)
         ).fetchone()
         return _board(row) if row else None
 
@@ -145,14 +149,14 @@ class SqliteStore:
                 raise KeyError(board.board_id)
             if only_if_empty and stored.participants:
                 raise BoardHasEntries(board.board_id)
-            db.execute("UPDATE boards SET board = ? WHERE board_id = ?",
+            db.execute("UPDATE boards SET board = ?, version = version + 1 WHERE board_id = ?",
                        (board.model_dump_json(), board.board_id))
         updated = self.get_board(board.board_id)
         assert updated is not None
         return updated
 
     def list_boards(self) -> list[StoredBoard]:
-        rows = self._db.execute("SELECT board, participants FROM boards ORDER BY board_id")
+        rows = self._db.execute("SELECT board, participants, version FROM boards ORDER BY board_id")
         return [_board(row) for row in rows]
 
     # ---- submissions ----------------------------------------------------------------------
@@ -183,9 +187,8 @@ class SqliteStore:
                 (entry.board_id, entry.racer_key, entry.score_key, entry.rank_key,
                  entry.model_dump_json()),
             )
-            if current is None:
-                db.execute("UPDATE boards SET participants = participants + 1 WHERE board_id = ?",
-                           (entry.board_id,))
+            db.execute("UPDATE boards SET participants = participants + ?, version = version + 1 "
+                       "WHERE board_id = ?", (1 if current is None else 0, entry.board_id))
             return WriteOutcome(duplicate=False, improved=True, entry=entry)
 
     @staticmethod
@@ -284,8 +287,8 @@ class SqliteStore:
             current = self._entry(db, board_id, racer_key)
             if current is not None:
                 db.execute("DELETE FROM entries WHERE board_id = ? AND racer_key = ?", (board_id, racer_key))
-                db.execute("UPDATE boards SET participants = participants - 1 WHERE board_id = ?",
-                           (board_id,))
+                db.execute("UPDATE boards SET participants = participants - 1, version = version + 1 "
+                           "WHERE board_id = ?", (board_id,))
             return current
 
     def restore_entry(self, entry: Entry) -> None:
@@ -295,8 +298,8 @@ class SqliteStore:
                 (entry.board_id, entry.racer_key, entry.score_key, entry.rank_key,
                  entry.model_dump_json())).rowcount
             if added:
-                db.execute("UPDATE boards SET participants = participants + 1 WHERE board_id = ?",
-                           (entry.board_id,))
+                db.execute("UPDATE boards SET participants = participants + 1, version = version + 1 "
+                           "WHERE board_id = ?", (entry.board_id,))
 
     def append_audit(self, event: AuditEvent) -> None:
         with self._write() as db:
@@ -350,5 +353,5 @@ def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
         raise LimitReached(tally)
 
 
-def _board(row: tuple[str, int]) -> StoredBoard:
-    return StoredBoard(Board.model_validate_json(row[0]), int(row[1]))
+def _board(row: tuple[str, int, int]) -> StoredBoard:
+    return StoredBoard(Board.model_validate_json(row[0]), int(row[1]), int(row[2]))
