@@ -197,6 +197,8 @@ RacerAlias = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
 Limit = Annotated[int, Query(ge=1, le=MAX_PAGE, description="How many entries (1..500).")]
 Cursor = Annotated[str | None, Query(max_length=MAX_CURSOR_CHARS,
                                      description="`next_cursor` of the previous page.")]
+Screen = Annotated[bool, Query(description="The big-screen mode: sized for a room, every entry, "
+                                           "a QR code of the page, auto-scrolling.")]
 IfNoneMatch = Annotated[str | None, Header(max_length=1024, description="The `ETag` of the copy "
                                           "the client holds.")]
 OnBoard = Annotated[str | None, Query(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
@@ -542,18 +544,35 @@ def index_page(service: Service) -> Response[str]:
                404: _error_response("No such board.")},
 )
 def board_view(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
-               cursor: Cursor = None, if_none_match: IfNoneMatch = None) -> Response[str]:
+               cursor: Cursor = None, screen: Screen = False,
+               if_none_match: IfNoneMatch = None) -> Response[str]:
     board_id = _segment(board)
+    if screen and limit == DEFAULT_LIMIT:
+        limit = MAX_PAGE  # the big screen scrolls through the whole board
+    view = "screen" if screen else "view"
     try:
         if if_none_match:
-            etag = page_etag("view." + service.board_tag(board_id), limit, cursor)
+            etag = page_etag(f"{view}.{service.board_tag(board_id)}", limit, cursor)
             if etag in (tag.strip() for tag in if_none_match.split(",")):
                 return _page("", HTTPStatus.NOT_MODIFIED, _etag_headers(etag))
         page = service.board_page(board_id, limit=limit, cursor=cursor or None)
     except BoardNotFound:  # a screen set up before the first push waits for the board
-        return _page(web.waiting_page(board_id), HTTPStatus.NOT_FOUND, LIVE_PAGE_HEADERS)
-    etag = page_etag("view." + page_tag(page.board), limit, cursor)
-    return _page(web.board_page(page, etag), headers=LIVE_PAGE_HEADERS | _etag_headers(etag))
+        return _page(web.waiting_page(board_id, screen), HTTPStatus.NOT_FOUND, LIVE_PAGE_HEADERS)
+    etag = page_etag(f"{view}.{page_tag(page.board)}", limit, cursor)
+    origin = _origin(pull_router.current_event)
+    url = origin + web.board_path(board_id)
+    html = web.board_page(page, etag, screen=screen, now=service.clock(), url=url,
+                          endpoint=origin, qr_svg=web.qr_svg(url) if screen else "")
+    return _page(html, headers=LIVE_PAGE_HEADERS | _etag_headers(etag))
+
+
+def _origin(event: Any) -> str:
+    """The board's own origin as the client reached it (https behind API Gateway)."""
+    headers = event.headers or {}
+    context = event.raw_event.get("requestContext") or {}
+    host = headers.get("host") or context.get("domainName") or "localhost"
+    scheme = headers.get("x-forwarded-proto", "http").split(",")[0].strip()
+    return f"{scheme}://{host}"
 
 
 def _page(html: str, status: int = HTTPStatus.OK,

@@ -88,3 +88,48 @@ def test_a_page_opened_before_the_first_push_shows_the_board_once_it_exists(
     page.wait_for_selector("tr[data-racer]", timeout=10_000)
     assert racers(page)
     shot(page, "first-push-390x844")
+
+
+LONG_RACER = "Maximilian the Unstoppable Racer of the Northern Leagues"
+
+
+def push_long_name(served: Served) -> None:
+    from tests.recordkit import make_record
+
+    record = make_record(LONG_RACER, [(9141, 100), (9500, 100)])
+    status, answer = served.post(f"/boards/{BOARD}/submissions", record.model_dump_json().encode())
+    assert status == 201, answer
+
+
+@pytest.mark.parametrize(("width", "height"), [(1920, 1080), (3840, 2160)])
+def test_the_big_screen_fills_the_room_without_wrapped_numbers(browser: Any, served: Served,
+                                                               width: int, height: int) -> None:
+    served.drboard("push", *RUNS)
+    push_long_name(served)
+    page = browser.new_page(viewport={"width": width, "height": height})
+    page.goto(f"{served.url}/boards/{BOARD}/view?screen=1")
+    expect(page.locator("tr[data-racer]")).to_have_count(len(RUNS) + 1)
+    expect(page.locator("figure.qr svg")).to_be_visible()
+    wrapped = page.eval_on_selector_all("td.num", """cells => cells.filter((cell) => {
+        const range = document.createRange();
+        range.selectNodeContents(cell);
+        const lines = new Set([...range.getClientRects()].map((r) => Math.round(r.top)));
+        return lines.size > 1 || cell.scrollWidth > cell.clientWidth;
+    }).map((cell) => cell.textContent)""")
+    assert wrapped == []
+    font = page.eval_on_selector("td.num", "cell => parseFloat(getComputedStyle(cell).fontSize)")
+    assert font >= width / 100, f"{font}px text on a {width}px screen"
+    table = page.eval_on_selector("table", "t => t.getBoundingClientRect().width")
+    assert table >= 0.9 * width
+    assert page.evaluate("document.documentElement.scrollWidth") <= width
+    shot(page, f"big-screen-{width}x{height}")
+
+
+def test_the_phone_sees_the_board_without_sideways_scrolling(browser: Any, served: Served) -> None:
+    served.drboard("push", *RUNS)
+    push_long_name(served)
+    page = browser.new_page(viewport={"width": 390, "height": 844})
+    page.goto(f"{served.url}/boards/{BOARD}/view")
+    expect(page.locator("tr[data-racer]")).to_have_count(len(RUNS) + 1)
+    assert page.evaluate("document.documentElement.scrollWidth") <= 390
+    shot(page, "board-390x844")
