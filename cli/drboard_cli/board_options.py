@@ -129,13 +129,14 @@ OPTION_OF_FIELD = {
     "custom_track": "--custom-track", "clockwise": "--clockwise", "race_type": "--race-type",
     "method": "--method", "min_laps": "--min-laps", "opens_at": "--opens-at",
     "closes_at": "--closes-at", "cooldown_s": "--cooldown", "max_submissions": "--max-submissions",
-    "flagged_runs": "--flagged-runs",
+    "flagged_runs": "--flagged-runs", "designs": "--designs",
 }
 _FIELD_OF_OPTION = {
     "board_id": "board_id", "title": "title", "description": "description", "track": "track",
     "custom_track": "custom_track", "clockwise": "clockwise", "race_type": "race_type",
     "method": "method", "min_laps": "min_laps", "opens_at": "opens_at", "closes_at": "closes_at",
     "cooldown": "cooldown_s", "max_submissions": "max_submissions", "flagged_runs": "flagged_runs",
+    "designs": "designs",
 }
 
 

@@ -344,6 +344,52 @@ def _racer(racer: str | None) -> str:
 
 
 @cli.command()
+@click.argument("racers", nargs=-1, required=True)
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
+              show_default=True, help=FORMAT_HELP)
+@pass_context
+def compare(ctx: Context, racers: tuple[str, ...], track: str | None, board: str | None,
+            fmt: str) -> None:
+    """Two to four racers' designs side by side, the facts they differ on marked ≠.
+
+    Algorithm, action space, speeds, steering, sensors, network, hyperparameters and training,
+    each racer's best model on the board.
+    """
+    with edge():
+        if not 2 <= len(racers) <= 4:
+            raise click.UsageError("give two to four racers")
+        comparison = ctx.board.compare(_board_id(track, board), list(racers))
+        if fmt == "json":
+            click.echo(comparison.model_dump_json(indent=2))
+        else:
+            out.print(render.comparison_table(comparison))
+
+
+@cli.command()
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@click.option("--top", type=click.IntRange(1, 20), default=5, show_default=True,
+              help="How many of the fastest qualified models make the top.")
+@click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
+              show_default=True, help=FORMAT_HELP)
+@pass_context
+def insights(ctx: Context, track: str | None, board: str | None, top: int, fmt: str) -> None:
+    """What the board's fastest models share against the field.
+
+    For each design fact, the top models' most common choice (and how many made it) or their
+    median, beside the field's (the board's first 100 entries).
+    """
+    with edge():
+        found = ctx.board.insights(_board_id(track, board), top)
+        if fmt == "json":
+            click.echo(found.model_dump_json(indent=2))
+        else:
+            out.print(render.insights_table(found))
+
+
+@cli.command()
 @click.option("--racer", envvar="DRBOARD_RACER",
               help="The racer (default: the last racer who pushed from this machine). "
                    "Env: DRBOARD_RACER.")
@@ -450,6 +496,9 @@ def _setting_options(update: bool) -> Callable[[Callable[..., Any]], Callable[..
         click.option("--flagged-runs", type=click.Choice(["rank", "unranked"]),
                      help="Whether runs the board's consistency checks flag still rank, or only "
                           "show below the qualified racers" + ("." if update else " (default: rank).")),
+        click.option("--designs", type=click.Choice(["public", "after-close"]),
+                     help="Whether everyone sees how the entries' models were built now, or only "
+                          "once the board closes" + ("." if update else " (default: public).")),
     ]
 
     def decorate(command: Callable[..., Any]) -> Callable[..., Any]:

@@ -17,6 +17,7 @@ import re
 import urllib.error
 import urllib.parse
 import urllib.request
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
@@ -30,10 +31,12 @@ from drboard_functions.models import (
     BoardPage,
     BoardSpec,
     BoardView,
+    Comparison,
     ExportPage,
     HistoryItem,
     ImportedSubmission,
     ImportReceipt,
+    Insights,
     Me,
     Moderation,
     PushReceipt,
@@ -88,6 +91,14 @@ class HttpBoard:
     def racer(self, board_id: str, racer: str) -> RacerView:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/racers/{_quote(racer)}")
         return _parse(RacerView, answer)
+
+    def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
+        answer = self._call("GET", f"/boards/{_quote(board_id)}/compare", query={"racer": list(racers)})
+        return _parse(Comparison, answer)
+
+    def insights(self, board_id: str, top: int) -> Insights:
+        answer = self._call("GET", f"/boards/{_quote(board_id)}/insights", query={"top": str(top)})
+        return _parse(Insights, answer)
 
     def history(self, racer: str, board_id: str | None) -> list[HistoryItem]:
         answer = self._call("GET", f"/racers/{_quote(racer)}/submissions", query={"board": board_id})
@@ -165,11 +176,13 @@ class HttpBoard:
     # ---- HTTP ---------------------------------------------------------------------------
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
-              query: dict[str, str | None] | None = None, signed: bool = False) -> Answer:
+              query: Mapping[str, str | list[str] | None] | None = None,
+              signed: bool = False) -> Answer:
         given = {name: value for name, value in (query or {}).items() if value}
         token = fresh_token(self.endpoint) if signed else None
         prefix = tokens.route_prefix(token) if token else ""
-        url = self.endpoint + prefix + path + (f"?{urllib.parse.urlencode(given)}" if given else "")
+        url = self.endpoint + prefix + path + (
+            f"?{urllib.parse.urlencode(given, doseq=True)}" if given else "")
         data = body.model_dump_json().encode("utf-8") if isinstance(body, BaseModel) else body
         headers = {"Accept": "application/json"}
         if data is not None:

@@ -12,6 +12,7 @@ from typing import IO, Any
 from drboard_assembler.record import Record
 from drboard_functions.display import (
     DASH,
+    PRIVATE_DESIGN,
     algorithm_name,
     design_summary,
     duration,
@@ -22,13 +23,17 @@ from drboard_functions.display import (
     when,
 )
 from drboard_functions.flags import DESCRIPTIONS
+from drboard_functions.insights import LABELS, fact_text
 from drboard_functions.models import (
     AuditEvent,
     BoardPage,
     BoardStatus,
     BoardView,
+    Comparison,
+    Design,
     EntryView,
     HistoryItem,
+    Insights,
     Me,
     Moderation,
     PushReceipt,
@@ -194,11 +199,17 @@ def _flat(entry: EntryView) -> dict[str, Any]:
         "rank": entry.rank, "racer": entry.racer, "model_name": entry.model_name,
         "qualified": entry.qualified, "time_s": s(entry.time_ms), "gap_s": s(entry.gap_ms),
         "best_lap_s": s(entry.best_lap_ms), "laps_completed": entry.laps_completed,
-        "best_completion_pct": entry.best_completion_pct, "algorithm": entry.design.algorithm,
-        "action_space": entry.design.action_space, "actions": entry.design.actions or "",
-        "max_speed": entry.design.max_speed, "max_steering": entry.design.max_steering,
+        "best_completion_pct": entry.best_completion_pct,
         "submitted_at": entry.submitted_at.isoformat(), "submission_id": entry.submission_id,
-    }
+    } | _flat_design(entry.design)
+
+
+def _flat_design(design: Design | None) -> dict[str, Any]:
+    if design is None:  # the board keeps designs private until it closes
+        return dict.fromkeys(("algorithm", "action_space", "actions", "max_speed", "max_steering"), "")
+    return {"algorithm": design.algorithm, "action_space": design.action_space,
+            "actions": design.actions or "", "max_speed": design.max_speed,
+            "max_steering": design.max_steering}
 
 
 def board_csv(page: BoardPage) -> str:
@@ -361,6 +372,9 @@ def racer_panel(view: RacerView) -> Group:
     summary.add_row("Racer", f"{view.racer} · rank {entry.rank} of {view.board.participants} on "
                     f"{view.board.board_id}")
     summary.add_row("Result", f"{_time_label(entry)} · gap {gap(entry.gap_ms)}")
+    if record is None:
+        summary.add_row("Model", f"{entry.model_name}: how it was built is {PRIVATE_DESIGN}")
+        return Group(summary)
     summary.add_row("Model", f"{record.model_name} ({record.source_layout.value} files)")
     design = record.design
     summary.add_row("Algorithm", algorithm_name(design.algorithm))
@@ -375,6 +389,38 @@ def racer_panel(view: RacerView) -> Group:
         summary.add_row(f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
     return Group(summary, hyperparameter_table(record), action_space_table(record),
                  laps_table(record))
+
+
+def comparison_table(comparison: Comparison) -> Table:
+    """The racers' designs side by side; the facts they differ on in bold, marked ≠."""
+    table = Table(title=f"{' vs '.join(c.racer for c in comparison.racers)} on "
+                        f"{comparison.board.board_id}", header_style="bold")
+    table.add_column("")
+    table.add_column("Fact")
+    for compared in comparison.racers:
+        table.add_column(f"{compared.racer} (#{compared.entry.rank}, {_time_label(compared.entry)})")
+    for fact, label in LABELS.items():
+        differs = fact in comparison.differences
+        values = [fact_text(fact, getattr(c.facts, fact)) for c in comparison.racers]
+        table.add_row("≠" if differs else "", label, *values, style="bold" if differs else None)
+    return table
+
+
+def insights_table(insights: Insights) -> Table:
+    """What the top models share against the field, one fact a row."""
+    table = Table(title=f"The top {insights.top} of {insights.board.board_id} against its "
+                        f"{insights.field} entries", header_style="bold")
+    table.add_column("Fact")
+    table.add_column(f"Top {insights.top}", justify="right")
+    table.add_column("Field", justify="right")
+    for fact in insights.facts:
+        table.add_row(fact.label, fact.top + _share(fact.top_share),
+                      fact.field + _share(fact.field_share))
+    return table
+
+
+def _share(share: float | None) -> str:
+    return "" if share is None else f" ({share:.0%})"
 
 
 def hyperparameter_table(record: Record) -> Table:

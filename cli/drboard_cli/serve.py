@@ -47,6 +47,7 @@ if TYPE_CHECKING:
 MAX_BODY_BYTES = 1024 * 1024  # the routes apply the record's own, smaller bound
 STREAM_POLL_S = 0.5  # how often an event stream looks at its board (one small SQLite read)
 STREAM_KEEPALIVE_S = 15.0
+IDLE_CONNECTION_S = 5.0
 MAX_STREAMS = 64
 _EVENTS_PATH = re.compile(r"^/boards/([^/]+)/events$")
 
@@ -73,7 +74,7 @@ def http_event(method: str, target: str, headers: dict[str, str], body: bytes,
         "rawPath": parts.path or "/",
         "rawQueryString": parts.query,
         "headers": {name.lower(): value for name, value in headers.items()},
-        "queryStringParameters": dict(parse_qsl(parts.query)) or None,
+        "queryStringParameters": _query_parameters(parts.query),
         "requestContext": {
             "accountId": "000000000000",
             "apiId": "local",
@@ -89,6 +90,14 @@ def http_event(method: str, target: str, headers: dict[str, str], body: bytes,
         "body": body.decode("utf-8", errors="replace") if body else None,
         "isBase64Encoded": False,
     }
+
+
+def _query_parameters(query: str) -> dict[str, str] | None:
+    """As API Gateway gives them: a repeated parameter's values joined with commas."""
+    values: dict[str, list[str]] = {}
+    for name, value in parse_qsl(query):
+        values.setdefault(name, []).append(value)
+    return {name: ",".join(items) for name, items in values.items()} or None
 
 
 def is_loopback(address: str) -> bool:
@@ -215,6 +224,9 @@ def _refused(error: DomainError) -> dict[str, Any]:
 class _Handler(BaseHTTPRequestHandler):
     server: BoardServer
     protocol_version = "HTTP/1.1"
+    # An idle keep-alive connection (a browser between two polls) is closed after this long,
+    # so stopping the server never waits on a client for long.
+    timeout = IDLE_CONNECTION_S
 
     def do_GET(self) -> None:
         self._dispatch()
@@ -246,6 +258,8 @@ class _Handler(BaseHTTPRequestHandler):
             self.close_connection = True
             return
         body = self.rfile.read(length) if length else b""
+        if self.server.closing.is_set():
+            self.close_connection = True  # stopping: answer, then let the client go
         event = http_event(self.command, self.path, dict(self.headers.items()), body,
                            self.client_address[0])
         result = self.server.handle_event(event)

@@ -3,6 +3,7 @@ deployed board (or `drboard serve`) answers the same calls over HTTP (``remote.H
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Protocol
 
@@ -14,10 +15,12 @@ from drboard_functions.models import (
     BoardPage,
     BoardSpec,
     BoardView,
+    Comparison,
     ExportPage,
     HistoryItem,
     ImportedSubmission,
     ImportReceipt,
+    Insights,
     Me,
     Moderation,
     PushReceipt,
@@ -32,6 +35,8 @@ class BoardClient(Protocol):
     def boards(self) -> list[BoardView]: ...
     def board_page(self, board_id: str, limit: int, cursor: str | None) -> BoardPage: ...
     def racer(self, board_id: str, racer: str) -> RacerView: ...
+    def compare(self, board_id: str, racers: Sequence[str]) -> Comparison: ...
+    def insights(self, board_id: str, top: int) -> Insights: ...
     def history(self, racer: str, board_id: str | None) -> list[HistoryItem]: ...
     def status(self, racer: str, board_id: str | None) -> RacerSummary: ...
     def me(self) -> Me: ...

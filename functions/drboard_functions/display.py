@@ -34,8 +34,13 @@ def algorithm_name(algorithm: str) -> str:
     return _ALGORITHMS.get(algorithm, algorithm)
 
 
-def design_summary(design: Design, *, sensors: bool = False) -> str:
+PRIVATE_DESIGN = "private until the board closes"
+
+
+def design_summary(design: Design | None, *, sensors: bool = False) -> str:
     """``PPO, 14 actions, 2 m/s, ±30°`` (and the sensors, when asked)."""
+    if design is None:
+        return PRIVATE_DESIGN
     space = f"{design.actions} actions" if design.actions else "continuous"
     summary = (f"{algorithm_name(design.algorithm)}, {space}, {design.max_speed:g} m/s, "
                f"±{design.max_steering:g}°")

@@ -49,6 +49,10 @@ class BoardClosed(DomainError):
     until the organiser changes its window."""
 
 
+class DesignsPrivate(DomainError):
+    """The board keeps its entries' designs private until it closes (HTTP 403)."""
+
+
 class SubmissionLimitReached(DomainError):
     """The racer has used every submission the board allows (HTTP 403)."""
 

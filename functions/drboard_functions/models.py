@@ -48,6 +48,8 @@ DEFAULT_MIN_LAPS = {
 
 
 FlaggedRuns = Literal["rank", "unranked"]
+#: Whether everyone sees how the entries' models were built now, or once the board closes.
+Designs = Literal["public", "after-close"]
 
 
 class Model(BaseModel):
@@ -98,6 +100,11 @@ class Board(Model):
     deleted_at: datetime | None = None
     #: Racer keys an organiser banned: their pushes are refused, their entry kept off the board.
     banned: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
+    designs: Designs = "public"
+
+    def designs_shown(self, now: datetime) -> bool:
+        """Whether the entries' designs show now: always, or once the board has closed."""
+        return self.designs == "public" or self.status(now) == BoardStatus.CLOSED
 
     @model_validator(mode="after")
     def _window_in_order(self) -> Self:
@@ -275,7 +282,7 @@ class EntryView(Model):
     best_completion_pct: float
     submitted_at: datetime
     submission_id: str
-    design: Design
+    design: Design | None = Field(description="None while the board keeps designs private.")
     flags: list[str] = []
 
 
@@ -291,6 +298,7 @@ class BoardView(Model):
     method: TimingMethod
     min_laps: int
     flagged_runs: FlaggedRuns = "rank"
+    designs: Designs = "public"
     status: BoardStatus
     opens_at: datetime | None
     closes_at: datetime | None
@@ -326,7 +334,9 @@ class RacerView(Model):
     racer: str
     entry: EntryView
     history: list[HistoryItem]
-    record: Record  # the best submission's full record: its design, laps and training
+    #: The best submission's full record (its design, laps and training); None while the board
+    #: keeps designs private.
+    record: Record | None
 
 
 class PushReceipt(Model):
@@ -379,6 +389,7 @@ class BoardSpec(Model):
     method: TimingMethod = TimingMethod.BEST_LAP_TIME
     min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
     flagged_runs: FlaggedRuns = "rank"
+    designs: Designs = "public"
     opens_at: Moment | None = None
     closes_at: Moment | None = None
     cooldown_s: CooldownSeconds = 0
@@ -394,6 +405,7 @@ class BoardChanges(Model):
     method: TimingMethod | None = None
     min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
     flagged_runs: FlaggedRuns | None = None
+    designs: Designs | None = None
     opens_at: Moment | None = None
     closes_at: Moment | None = None
     cooldown_s: CooldownSeconds | None = None
@@ -441,3 +453,68 @@ class ImportReceipt(Model):
     status: Literal["created", "duplicate"]
     board_id: str
     submission_id: str
+
+
+# ---- comparing designs ---------------------------------------------------------------------------
+
+
+class DesignFacts(Model):
+    """What a model's design comes down to, one comparable value per fact (None: not known)."""
+
+    algorithm: str
+    action_space: Literal["discrete", "continuous"]
+    actions: int | None
+    max_speed: float
+    min_speed: float | None
+    max_steering: float
+    sensors: list[str]
+    neural_network: str | None
+    discount_factor: float | None
+    learning_rate: float | None
+    batch_size: int | None
+    entropy: float | None
+    epochs: int | None
+    episodes_between_training: int | None
+    loss_type: str | None
+    training_time_s: float | None
+    training_episodes: int | None
+
+
+class ComparedRacer(Model):
+    racer: str
+    entry: EntryView
+    facts: DesignFacts
+
+
+class Comparison(Model):
+    board: BoardView
+    racers: list[ComparedRacer]
+    #: The facts (DesignFacts' field names) on which the racers' designs differ.
+    differences: list[str]
+
+
+class SharedFact(Model):
+    """One fact of the top models against the whole field: the most common value and how many
+    have it (a choice), or the median (a number)."""
+
+    fact: str
+    label: str
+    top: str
+    field: str
+    top_share: float | None = None
+    field_share: float | None = None
+
+
+class SpeedPoint(Model):
+    racer: str
+    max_speed: float
+    time_ms: int | None
+    top: bool
+
+
+class Insights(Model):
+    board: BoardView
+    top: int
+    field: int
+    facts: list[SharedFact]
+    points: list[SpeedPoint]

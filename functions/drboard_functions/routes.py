@@ -58,7 +58,7 @@ from drboard_assembler import __version__ as assembler_version
 from drboard_assembler import limits
 from drboard_assembler.errors import field_path
 from drboard_assembler.record import Record
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints
 
 from . import web
 from .errors import (
@@ -70,6 +70,7 @@ from .errors import (
     BoardMismatch,
     BoardNotFound,
     CopiedRun,
+    DesignsPrivate,
     DomainError,
     InvalidQuery,
     InvalidSubmission,
@@ -90,9 +91,11 @@ from .models import (
     BoardPage,
     BoardSpec,
     BoardView,
+    Comparison,
     ExportPage,
     ImportedSubmission,
     ImportReceipt,
+    Insights,
     Me,
     Moderation,
     PushReceipt,
@@ -100,7 +103,14 @@ from .models import (
     RacerSummary,
     RacerView,
 )
-from .service import MAX_CURSOR_CHARS, LeaderboardService, page_tag
+from .service import (
+    DEFAULT_TOP,
+    MAX_COMPARED,
+    MAX_CURSOR_CHARS,
+    MAX_TOP,
+    LeaderboardService,
+    page_tag,
+)
 
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
@@ -197,6 +207,10 @@ RacerAlias = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
 Limit = Annotated[int, Query(ge=1, le=MAX_PAGE, description="How many entries (1..500).")]
 Cursor = Annotated[str | None, Query(max_length=MAX_CURSOR_CHARS,
                                      description="`next_cursor` of the previous page.")]
+Compared = Annotated[list[Annotated[str, StringConstraints(min_length=1, max_length=MAX_PATH_PARAM_CHARS)]],
+                     Query(min_length=2, max_length=MAX_COMPARED,
+                           description="A racer to compare: give it two to four times.")]
+Top = Annotated[int, Query(ge=1, le=MAX_TOP, description="How many top models (1..20).")]
 Screen = Annotated[bool, Query(description="The big-screen mode: sized for a room, every entry, "
                                            "a QR code of the page, auto-scrolling.")]
 IfNoneMatch = Annotated[str | None, Header(max_length=1024, description="The `ETag` of the copy "
@@ -486,6 +500,34 @@ def get_racer(board: BoardId, racer: RacerAlias, service: Service) -> RacerView:
 
 
 @pull_router.get(
+    "/boards/<board>/compare",
+    summary="Racers' designs side by side",
+    description="Two to four racers' designs as comparable facts (algorithm, action space, top "
+                "speed, steering, sensors, hyperparameters, training), and the facts they differ on.",
+    tags=["boards"],
+    responses={200: _json_response("The racers' entries and design facts.", Comparison),
+               400: _error_response("Fewer than two racers, or more than four."),
+               404: _error_response("No such board, or a racer has no entry on it.")},
+)
+def get_comparison(board: BoardId, service: Service, racer: Compared) -> Comparison:
+    return service.compare(_segment(board), racer)
+
+
+@pull_router.get(
+    "/boards/<board>/insights",
+    summary="What the top models share",
+    description="Each design fact of the board's top `top` qualified models against the field "
+                "(its first 100 entries), and every entry's top speed against its time.",
+    tags=["boards"],
+    responses={200: _json_response("The shared facts and the speed points.", Insights),
+               400: _error_response("A bad `top`."),
+               404: _error_response("No such board.")},
+)
+def get_insights(board: BoardId, service: Service, top: Top = DEFAULT_TOP) -> Insights:
+    return service.insights(_segment(board), top)
+
+
+@pull_router.get(
     "/racers/<racer>",
     summary="Where a racer stands",
     description="On each board the racer pushed to (or on `board` only), latest first: their "
@@ -573,6 +615,37 @@ def _origin(event: Any) -> str:
     host = headers.get("host") or context.get("domainName") or "localhost"
     scheme = headers.get("x-forwarded-proto", "http").split(",")[0].strip()
     return f"{scheme}://{host}"
+
+
+@pull_router.get(
+    "/boards/<board>/racers/<racer>/view",
+    summary="A racer's web page",
+    tags=["pages"],
+    responses={200: _PAGE_RESPONSE, 404: _error_response("No such board or racer.")},
+)
+def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[str]:
+    return _page(web.racer_page(service.racer(_segment(board), _segment(racer))))
+
+
+@pull_router.get(
+    "/boards/<board>/compare/view",
+    summary="The compare page",
+    tags=["pages"],
+    responses={200: _PAGE_RESPONSE, 400: _error_response("Fewer than two racers, or more than four."),
+               404: _error_response("No such board or racer.")},
+)
+def compare_view(board: BoardId, service: Service, racer: Compared) -> Response[str]:
+    return _page(web.compare_page(service.compare(_segment(board), racer)))
+
+
+@pull_router.get(
+    "/boards/<board>/insights/view",
+    summary="The insights page",
+    tags=["pages"],
+    responses={200: _PAGE_RESPONSE, 404: _error_response("No such board.")},
+)
+def insights_view(board: BoardId, service: Service, top: Top = DEFAULT_TOP) -> Response[str]:
+    return _page(web.insights_page(service.insights(_segment(board), top)))
 
 
 def _page(html: str, status: int = HTTPStatus.OK,
@@ -828,6 +901,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
     (TooSoon, HTTPStatus.TOO_MANY_REQUESTS),
     (BoardClosed, HTTPStatus.FORBIDDEN),
+    (DesignsPrivate, HTTPStatus.FORBIDDEN),
     (SubmissionLimitReached, HTTPStatus.FORBIDDEN),
     (NotSignedIn, HTTPStatus.UNAUTHORIZED),
     (AliasTaken, HTTPStatus.FORBIDDEN),

@@ -13,7 +13,7 @@ import json
 import math
 import re
 import secrets
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from datetime import UTC, datetime, timedelta
 from typing import Any, Literal
 
@@ -33,6 +33,7 @@ from .errors import (
     BoardMismatch,
     BoardNotFound,
     CopiedRun,
+    DesignsPrivate,
     DomainError,
     InvalidQuery,
     NotAuthorized,
@@ -42,6 +43,7 @@ from .errors import (
     TooSoon,
 )
 from .identity import LOCAL_ORGANISER, Caller
+from .insights import design_facts, differences, shared_facts
 from .models import (
     BOARD_ID_PATTERN,
     MAX_PAGE,
@@ -56,6 +58,8 @@ from .models import (
     BoardSpec,
     BoardStatus,
     BoardView,
+    ComparedRacer,
+    Comparison,
     Design,
     Entry,
     EntryView,
@@ -67,6 +71,7 @@ from .models import (
     HistoryItem,
     ImportedSubmission,
     ImportReceipt,
+    Insights,
     Me,
     Moderation,
     PushReceipt,
@@ -74,6 +79,7 @@ from .models import (
     RacerSummary,
     RacerTally,
     RacerView,
+    SpeedPoint,
     Submission,
     SubmissionLimits,
     run_mismatches,
@@ -90,6 +96,10 @@ from .stores.base import (
 
 Clock = Callable[[], datetime]
 MAX_CURSOR_CHARS = 1024
+MAX_COMPARED = 4
+DEFAULT_TOP, MAX_TOP = 5, 20
+#: Insights read this many of a board's entries (and their records) as the field.
+INSIGHTS_FIELD = 100
 
 _RACE_SUFFIX = {
     RaceType.TIME_TRIAL: "",
@@ -304,11 +314,12 @@ class LeaderboardService:
             entries = self.store.top(board_id, limit, after.rank_key)
             leader = self._leader(board_id)
         views: list[EntryView] = []
+        shown = stored.board.designs_shown(self.clock())
         previous = after
         for offset, entry in enumerate(entries):
             position = (after.position if after else 0) + offset + 1
             rank = previous.rank if previous and previous.score_key == entry.score_key else position
-            views.append(_entry_view(entry, rank, leader))
+            views.append(_entry_view(entry, rank, leader, design=shown))
             previous = _Cursor(entry.rank_key, entry.score_key, rank, position)
         more = len(entries) == limit and previous is not None
         return BoardPage(
@@ -325,20 +336,66 @@ class LeaderboardService:
     def racer(self, board_id: str, racer: str) -> RacerView:
         stored = self._require_board(board_id)
         key = racer_key(racer)
-        entry = self.store.get_entry(board_id, key)
+        entry, record = self._entry_and_record(board_id, racer)
+        rank = self.store.count_better(board_id, entry.score_key) + 1
+        shown = stored.board.designs_shown(self.clock())
+        return RacerView(
+            board=_board_view(stored, self.clock()),
+            racer=entry.racer,
+            entry=_entry_view(entry, rank, self._leader(board_id), design=shown),
+            history=[_history_item(s, entry) for s in self.store.history(key, board_id)],
+            record=record if shown else None,
+        )
+
+    def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
+        """The racers' designs side by side, and the facts they differ on."""
+        if not 2 <= len(racers) <= MAX_COMPARED:
+            raise InvalidQuery(f"compare 2 to {MAX_COMPARED} racers")
+        stored = self._require_board(board_id)
+        self._require_designs(stored.board)
+        leader = self._leader(board_id)
+        compared = []
+        for racer in racers:
+            entry, record = self._entry_and_record(board_id, racer)
+            rank = self.store.count_better(board_id, entry.score_key) + 1
+            compared.append(ComparedRacer(racer=entry.racer, entry=_entry_view(entry, rank, leader),
+                                          facts=design_facts(record)))
+        return Comparison(board=_board_view(stored, self.clock()), racers=compared,
+                          differences=differences([c.facts for c in compared]))
+
+    def insights(self, board_id: str, top: int = DEFAULT_TOP) -> Insights:
+        """What the ``top`` qualified models share against the field (the board's first
+        INSIGHTS_FIELD entries), and every entry's top speed against its time."""
+        if not 1 <= top <= MAX_TOP:
+            raise InvalidQuery(f"top must be between 1 and {MAX_TOP}")
+        self._require_designs(self._require_board(board_id).board)
+        page = self.board_page(board_id, limit=INSIGHTS_FIELD)
+        facts = {}
+        for view in page.entries:
+            _, record = self._entry_and_record(board_id, view.racer)
+            facts[view.racer] = design_facts(record)
+        leaders = [view.racer for view in page.entries if view.qualified][:top]
+        return Insights(
+            board=page.board, top=len(leaders), field=len(page.entries),
+            facts=shared_facts([facts[r] for r in leaders], list(facts.values())),
+            points=[SpeedPoint(racer=view.racer, max_speed=facts[view.racer].max_speed,
+                               time_ms=view.time_ms, top=view.racer in leaders)
+                    for view in page.entries],
+        )
+
+    def _require_designs(self, board: Board) -> None:
+        if not board.designs_shown(self.clock()):
+            raise DesignsPrivate(f"the designs on {board.board_id!r} are private until it closes"
+                                 + (f" ({board.closes_at.isoformat()})" if board.closes_at else ""))
+
+    def _entry_and_record(self, board_id: str, racer: str) -> tuple[Entry, Record]:
+        entry = self.store.get_entry(board_id, racer_key(racer))
         if entry is None:
             raise RacerNotFound(f"{racer!r} has no entry on {board_id!r}")
         record = self.store.get_record(board_id, entry.submission_id)
         if record is None:  # pragma: no cover - an entry always has its submission
             raise RacerNotFound(f"the record of {racer!r} on {board_id!r} is missing")
-        rank = self.store.count_better(board_id, entry.score_key) + 1
-        return RacerView(
-            board=_board_view(stored, self.clock()),
-            racer=entry.racer,
-            entry=_entry_view(entry, rank, self._leader(board_id)),
-            history=[_history_item(s, entry) for s in self.store.history(key, board_id)],
-            record=record,
-        )
+        return entry, record
 
     def history(self, racer: str, board_id: str | None = None) -> list[HistoryItem]:
         """The racer's submissions, oldest first, on one board or on every board."""
@@ -386,7 +443,8 @@ class LeaderboardService:
             board=_board_view(stored, now),
             racer=latest.racer,
             latest=_history_item(latest, entry),
-            entry=_entry_view(entry, rank, self._leader(board.board_id)),
+            entry=_entry_view(entry, rank, self._leader(board.board_id),
+                              design=board.designs_shown(now)),
             submissions=tally.submissions,
             submissions_left=left,
             next_submission_at=next_at,
@@ -435,7 +493,7 @@ class LeaderboardService:
             rules={"method": spec.method, "min_laps": spec.min_laps,
                    "flagged_runs": spec.flagged_runs},
             opens_at=spec.opens_at, closes_at=spec.closes_at, cooldown_s=spec.cooldown_s,
-            max_submissions=spec.max_submissions, created_at=now,
+            max_submissions=spec.max_submissions, designs=spec.designs, created_at=now,
         )
         if self.store.get_board(board.board_id) is not None:
             raise BoardExists(f"there is already a board {board.board_id!r}")
@@ -453,7 +511,7 @@ class LeaderboardService:
         for name in ("title", "method"):
             if name in given and getattr(changes, name) is None:
                 raise InvalidQuery(f"{name} cannot be cleared")
-        cleared = {"description": "", "cooldown_s": 0}  # what null means for the unbounded ones
+        cleared = {"description": "", "cooldown_s": 0, "designs": "public"}  # what null means
         updates = {name: cleared.get(name) if getattr(changes, name) is None else getattr(changes, name)
                    for name in given if name not in ("method", "min_laps", "flagged_runs")}
         method = changes.method if "method" in given and changes.method else board.rules.method
@@ -838,6 +896,7 @@ def _board_view(stored: StoredBoard, now: datetime) -> BoardView:
         method=board.rules.method,
         min_laps=board.rules.min_laps,
         flagged_runs=board.rules.flagged_runs,
+        designs=board.designs,
         status=board.status(now),
         opens_at=board.opens_at,
         closes_at=board.closes_at,
@@ -854,7 +913,7 @@ def page_tag(board: BoardView) -> str:
     return f"{board.version}.{board.status.value}"
 
 
-def _entry_view(entry: Entry, rank: int, leader: Entry | None) -> EntryView:
+def _entry_view(entry: Entry, rank: int, leader: Entry | None, *, design: bool = True) -> EntryView:
     gap = None
     if entry.score.time_ms is not None and leader and leader.score.time_ms is not None:
         gap = entry.score.time_ms - leader.score.time_ms
@@ -870,7 +929,7 @@ def _entry_view(entry: Entry, rank: int, leader: Entry | None) -> EntryView:
         best_completion_pct=entry.score.best_completion_pct,
         submitted_at=entry.achieved_at,
         submission_id=entry.submission_id,
-        design=entry.design,
+        design=entry.design if design else None,
         flags=entry.score.flags,
     )
 

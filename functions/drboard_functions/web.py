@@ -19,10 +19,23 @@ from datetime import datetime
 from html import escape
 from urllib.parse import quote, urlencode
 
-from .display import DASH, duration, gap, method_label, percent, seconds, when
+from drboard_assembler.record import Record
+
+from . import charts
+from .display import DASH, PRIVATE_DESIGN, duration, gap, method_label, percent, seconds, when
 from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
-from .models import BoardPage, BoardStatus, BoardView, Design, EntryView
+from .insights import LABELS, design_facts, fact_text
+from .models import (
+    BoardPage,
+    BoardStatus,
+    BoardView,
+    Comparison,
+    Design,
+    EntryView,
+    Insights,
+    RacerView,
+)
 
 REFRESH_S = 30
 
@@ -56,7 +69,8 @@ p.howto code{{color:{TEXT}}}
 a{{color:{LINK}}}
 table{{border-collapse:collapse;width:100%;font-variant-numeric:tabular-nums}}
 th,td{{padding:.45rem .6rem;text-align:left;border-bottom:1px solid #26313d;vertical-align:top}}
-th{{color:{MUTED};font-weight:600;font-size:.85rem;text-transform:uppercase;letter-spacing:.03em}}
+th{{color:{MUTED};font-weight:600}}
+thead th{{font-size:.85rem;text-transform:uppercase;letter-spacing:.03em}}
 td.num,th.num{{text-align:right;white-space:nowrap}}
 td.rank{{font-weight:700}}
 td.rank span{{display:inline-block;min-width:1.6em;text-align:center;border-radius:.3em}}
@@ -65,6 +79,11 @@ tr.dnq td{{color:{MUTED}}}
 .status{{display:inline-block;font-weight:700;padding:.05em .45em;border-radius:.3em}}
 .board-head{{display:flex;gap:1.5rem;align-items:flex-start;justify-content:space-between}}
 .qr svg{{display:block;width:9rem;height:9rem;border-radius:.3em}}
+figure.chart{{margin:1rem 0;max-width:44rem}}figure.chart svg{{width:100%;height:auto}}
+figcaption{{color:{MUTED};font-size:.85rem}}
+tr.differs th,tr.differs td{{color:{TEXT};font-weight:700}}
+tr.differs th::after{{content:" ≠"}}
+section{{margin-top:1.2rem}}
 footer{{color:{MUTED};font-size:.8rem;margin-top:1.5rem}}
 #live{{font-size:.85rem;min-height:1.2em}}
 @keyframes glow{{from{{background:var(--glow)}}to{{background:transparent}}}}
@@ -174,7 +193,7 @@ def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
 
 
-def design_summary(design: Design) -> str:
+def design_summary(design: Design | None) -> str:
     return _design_summary(design, sensors=True)
 
 
@@ -251,6 +270,177 @@ def waiting_page(board_id: str, screen: bool = False) -> str:
                      live=_live_attributes(board_id, "", screen) + ' data-missing="1"')
 
 
+def racer_page(view: RacerView) -> str:
+    """``/boards/{board}/racers/{racer}/view``: the counted run's laps, the action space, the
+    hyperparameters, the training, the racer's submissions over time and any flags."""
+    entry, record, board = view.entry, view.record, view.board
+    standing = (f"#{entry.rank} on {board.title} · {seconds(entry.time_ms)}" if entry.qualified
+                else f"#{entry.rank} on {board.title} · {percent(entry.best_completion_pct)} done")
+    body = _flags_section(entry.flags)
+    links = f'<p><a href="{escape(board_path(board.board_id))}">{escape(board.title)}</a></p>'
+    if record is None:
+        body += f"<p>How this model was built is {PRIVATE_DESIGN}.</p>" + _history_section(view)
+        return _document(f"{view.racer} · {board.title} · drboard", view.racer,
+                         f"{standing} · {entry.model_name}", body + links)
+    run = record.best_run
+    body += "<section><h2>Laps of the best evaluation run</h2>" + charts.bars(
+        f"Lap times of {view.racer}'s best run",
+        f"{len(run.laps)} laps of {run.source}; dim bars did not finish "
+        f"(their completion is shown).",
+        [charts.Bar(label=str(lap.trial),
+                    value=lap.time_ms / 1000,
+                    text=seconds(lap.time_ms) if lap.complete else percent(lap.completion_pct),
+                    strong=lap.complete) for lap in run.laps], "seconds") + "</section>"
+    body += "<section><h2>Action space</h2>" + _action_space_chart(record) + "</section>"
+    body += "<section><h2>Design</h2>" + _facts_table([("model", record.model_name)] + [
+        (label, value) for label, value in _design_rows(record)]) + "</section>"
+    if record.training:
+        training = record.training
+        body += ("<section><h2>Training</h2>"
+                 + _facts_table([("episodes", str(training.episodes)),
+                                 ("training time", duration(int(training.training_time_s))),
+                                 ("best reward", _number(training.best_reward)),
+                                 ("mean reward", _number(training.mean_reward)),
+                                 ("best completion", percent(training.best_completion_pct)),
+                                 ("completed laps", str(training.completed_laps))])
+                 + charts.line("Reward during training",
+                               "Mean reward of each stretch of training episodes.",
+                               [(p.episode, p.reward) for p in training.curve], "episode",
+                               "reward")
+                 + "</section>")
+    body += _history_section(view)
+    links = (f'<p><a href="{escape(board_path(board.board_id))}">{escape(board.title)}</a> · '
+             f'<a href="{escape(_insights_path(board.board_id))}">What the fast models share</a></p>')
+    return _document(f"{view.racer} · {board.title} · drboard", view.racer,
+                     f"{standing} · {record.model_name}", body + links)
+
+
+def _history_section(view: RacerView) -> str:
+    timed = [charts.Point(x=n, y=item.time_ms / 1000,
+                          label=f"{when(item.submitted_at)}: {seconds(item.time_ms)}",
+                          strong=item.is_best)
+             for n, item in enumerate(view.history, start=1) if item.time_ms is not None]
+    rows = "".join(
+        f"<tr><td>{escape(when(item.submitted_at))}</td><td>{escape(item.model_name)}</td>"
+        f'<td class="num">{escape(_result(item.qualified, item.time_ms, item.best_completion_pct))}'
+        f"{_flag_mark(item.flags)}</td><td>{'★ counts' if item.is_best else ''}</td></tr>"
+        for item in view.history)
+    return ("<section><h2>Submissions</h2><table><thead><tr><th scope=\"col\">When</th>"
+             "<th scope=\"col\">Model</th><th scope=\"col\" class=\"num\">Time</th>"
+             "<th scope=\"col\">Counted</th></tr></thead><tbody>" + rows + "</tbody></table>"
+             + (charts.points("Times of the racer's submissions",
+                              "Each submission's time, oldest on the left; the one that counts "
+                              "is highlighted.", timed, "submission", "seconds")
+                if len(timed) > 1 else "")
+            + "</section>")
+
+
+def compare_page(comparison: Comparison) -> str:
+    """``/boards/{board}/compare/view?racer=A&racer=B``: the designs side by side, the facts
+    they differ on marked."""
+    board = comparison.board
+    names = [c.racer for c in comparison.racers]
+    head = "".join(f'<th scope="col">{escape(c.racer)} (#{c.entry.rank}, '
+                   f"{escape(seconds(c.entry.time_ms))})</th>" for c in comparison.racers)
+    rows = []
+    for fact, label in LABELS.items():
+        cells = "".join(f"<td>{escape(fact_text(fact, getattr(c.facts, fact)))}</td>"
+                        for c in comparison.racers)
+        css = ' class="differs"' if fact in comparison.differences else ""
+        rows.append(f'<tr{css}><th scope="row">{escape(label)}</th>{cells}</tr>')
+    count = len(comparison.differences)
+    summary = f"{count} difference{'s' if count != 1 else ''}, marked ≠."
+    body = (f'<p class="rules">{escape(summary)}</p><table><thead><tr><th scope="col">Fact</th>'
+            f"{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+            f'<p><a href="{escape(board_path(board.board_id))}">{escape(board.title)}</a></p>')
+    return _document(f"{' vs '.join(names)} · {board.title} · drboard", " vs ".join(names),
+                     board.title, body)
+
+
+def insights_page(insights: Insights) -> str:
+    """``/boards/{board}/insights/view``: what the top models share against the field, and
+    top speed against lap time."""
+    board = insights.board
+    rows = "".join(
+        f'<tr><th scope="row">{escape(f.label)}</th><td>{escape(f.top)}{_share(f.top_share)}</td>'
+        f"<td>{escape(f.field)}{_share(f.field_share)}</td></tr>" for f in insights.facts)
+    body = (f'<p class="rules">The top {insights.top} qualified models against the board\'s '
+            f"first {insights.field} entries: the most common choice and how many made it, or "
+            "the median.</p>"
+            '<table><thead><tr><th scope="col">Fact</th>'
+            f'<th scope="col">Top {insights.top}</th><th scope="col">Field</th></tr></thead>'
+            f"<tbody>{rows}</tbody></table>")
+    timed = [p for p in insights.points if p.time_ms is not None]
+    if timed:
+        body += charts.points("Top speed against time",
+                              "Each qualified entry's top speed and time; the top models "
+                              "are highlighted.",
+                              [charts.Point(x=p.max_speed, y=p.time_ms / 1000,
+                                            label=f"{p.racer}: {p.max_speed:g} m/s, "
+                                                  f"{seconds(p.time_ms)}", strong=p.top)
+                               for p in timed if p.time_ms is not None],
+                              "top speed (m/s)", "time (s)")
+    body += f'<p><a href="{escape(board_path(board.board_id))}">{escape(board.title)}</a></p>'
+    return _document(f"What the fast models share · {board.title} · drboard",
+                     "What the fast models share", board.title, body)
+
+
+def _result(qualified: bool, time_ms: int | None, completion_pct: float) -> str:
+    return seconds(time_ms) if qualified else f"{percent(completion_pct)} done"
+
+
+def _share(share: float | None) -> str:
+    return "" if share is None else f" ({share:.0%})"
+
+
+def _number(value: float | None) -> str:
+    return DASH if value is None else f"{value:g}"
+
+
+def _flags_section(flags: list[str]) -> str:
+    if not flags:
+        return ""
+    items = "".join(f"<li>{escape(DESCRIPTIONS.get(flag, flag))}</li>" for flag in flags)
+    return f'<section><h2>⚑ Flags</h2><ul class="flags">{items}</ul></section>'
+
+
+def _design_rows(record: Record) -> list[tuple[str, str]]:
+    facts = design_facts(record)
+    rows = [(label, fact_text(name, getattr(facts, name))) for name, label in LABELS.items()
+            if not name.startswith("training") and getattr(facts, name) is not None]
+    hyper = record.design.hyperparameters
+    shown = {"discount_factor", "lr", "batch_size", "beta_entropy", "num_epochs",
+             "num_episodes_between_training", "loss_type"}
+    rest = hyper.model_dump(exclude=shown | {"other"}, exclude_none=True) | hyper.other
+    rows.extend((name.replace("_", " "), str(value)) for name, value in sorted(rest.items()))
+    return rows
+
+
+def _facts_table(rows: list[tuple[str, str]]) -> str:
+    body = "".join(f'<tr><th scope="row">{escape(label)}</th><td>{escape(value)}</td></tr>'
+                   for label, value in rows)
+    return f"<table><tbody>{body}</tbody></table>"
+
+
+def _action_space_chart(record: Record) -> str:
+    space = record.design.action_space
+    limit = max(space.max_steering, 1.0)
+    if space.actions:
+        return charts.points(
+            "Action space", f"{len(space.actions)} actions: speed against steering angle.",
+            [charts.Point(x=a.steering_angle, y=a.speed,
+                          label=f"{a.steering_angle:g}°, {a.speed:g} m/s") for a in space.actions],
+            "steering angle (°)", "speed (m/s)", x_range=(-limit, limit),
+            y_range=(0, space.max_speed))
+    assert space.speed is not None and space.steering_angle is not None
+    return charts.points(
+        "Action space", f"Continuous: {space.speed.low:g}–{space.speed.high:g} m/s, "
+        f"{space.steering_angle.low:g}° to {space.steering_angle.high:g}°.", [],
+        "steering angle (°)", "speed (m/s)", x_range=(-limit, limit), y_range=(0, space.max_speed),
+        area=(space.steering_angle.low, space.steering_angle.high, space.speed.low,
+              space.speed.high))
+
+
 def error_page(status: int, phrase: str, message: str) -> str:
     return _document(f"{status} {phrase} · drboard", phrase, message,
                      '<p><a href="/">All boards</a></p>', refresh=False)
@@ -323,7 +513,7 @@ def _entry_row(board_id: str, entry: EntryView) -> str:
     css = (f"q{entry.rank}" if entry.rank <= 3 else "") if entry.qualified else "dnq"
     data = f' data-racer="{escape(entry.racer)}" data-submission="{escape(entry.submission_id)}"'
     row = f'<tr class="{css}"{data}>' if css else f"<tr{data}>"
-    time = seconds(entry.time_ms) if entry.qualified else f"{percent(entry.best_completion_pct)} done"
+    time = _result(entry.qualified, entry.time_ms, entry.best_completion_pct)
     return (
         f"{row}"
         f'<td class="num rank"><span>{entry.rank}</span></td>'

@@ -38,6 +38,20 @@ def browser() -> Iterator[Any]:
 
 
 @pytest.fixture
+def new_page(browser: Any) -> Iterator[Any]:
+    """Opens pages of the given size in a browser context of this test's own, closed after it."""
+    context = browser.new_context()
+
+    def open_page(width: int, height: int) -> Any:
+        page = context.new_page()
+        page.set_viewport_size({"width": width, "height": height})
+        return page
+
+    yield open_page
+    context.close()
+
+
+@pytest.fixture
 def served(tmp_path: Path) -> Iterator[Served]:
     board = _serve(tmp_path, db=tmp_path / "event.db")
     yield board
@@ -54,10 +68,10 @@ def racers(page: Any) -> list[str]:
     return page.eval_on_selector_all("tr[data-racer]", "rows => rows.map(r => r.dataset.racer)")
 
 
-def test_a_push_updates_the_open_page_in_place_and_marks_the_row(browser: Any,
-                                                                  served: Served) -> None:
+def test_a_push_updates_the_open_page_in_place_and_marks_the_row(served: Served,
+                                                                  new_page: Any) -> None:
     served.drboard("push", RUNS[0])
-    page = browser.new_page(viewport={"width": 1920, "height": 1080})
+    page = new_page(1920, 1080)
     statuses: list[int] = []
     page.on("response", lambda response: statuses.append(response.status)
             if response.url.endswith(f"/boards/{BOARD}/view") else None)
@@ -80,8 +94,8 @@ def test_a_push_updates_the_open_page_in_place_and_marks_the_row(browser: Any,
 
 
 def test_a_page_opened_before_the_first_push_shows_the_board_once_it_exists(
-        browser: Any, served: Served) -> None:
-    page = browser.new_page(viewport={"width": 390, "height": 844})
+        served: Served, new_page: Any) -> None:
+    page = new_page(390, 844)
     page.goto(f"{served.url}/boards/{BOARD}/view")
     expect(page.locator("#live")).to_have_text("Waiting for the board's first push")
     served.drboard("push", RUNS[0])
@@ -102,11 +116,11 @@ def push_long_name(served: Served) -> None:
 
 
 @pytest.mark.parametrize(("width", "height"), [(1920, 1080), (3840, 2160)])
-def test_the_big_screen_fills_the_room_without_wrapped_numbers(browser: Any, served: Served,
+def test_the_big_screen_fills_the_room_without_wrapped_numbers(served: Served, new_page: Any,
                                                                width: int, height: int) -> None:
     served.drboard("push", *RUNS)
     push_long_name(served)
-    page = browser.new_page(viewport={"width": width, "height": height})
+    page = new_page(width, height)
     page.goto(f"{served.url}/boards/{BOARD}/view?screen=1")
     expect(page.locator("tr[data-racer]")).to_have_count(len(RUNS) + 1)
     expect(page.locator("figure.qr svg")).to_be_visible()
@@ -125,11 +139,38 @@ def test_the_big_screen_fills_the_room_without_wrapped_numbers(browser: Any, ser
     shot(page, f"big-screen-{width}x{height}")
 
 
-def test_the_phone_sees_the_board_without_sideways_scrolling(browser: Any, served: Served) -> None:
+def test_the_phone_sees_the_board_without_sideways_scrolling(served: Served, new_page: Any) -> None:
     served.drboard("push", *RUNS)
     push_long_name(served)
-    page = browser.new_page(viewport={"width": 390, "height": 844})
+    page = new_page(390, 844)
     page.goto(f"{served.url}/boards/{BOARD}/view")
     expect(page.locator("tr[data-racer]")).to_have_count(len(RUNS) + 1)
     assert page.evaluate("document.documentElement.scrollWidth") <= 390
     shot(page, "board-390x844")
+
+
+def test_the_racer_page_draws_the_laps_and_the_action_space(served: Served, new_page: Any) -> None:
+    served.drboard("push", *RUNS)
+    page = new_page(1280, 900)
+    page.goto(f"{served.url}/boards/{BOARD}/view")
+    page.locator("tr[data-racer] a").first.click()
+    expect(page.locator("h1")).to_have_text("Blaze")
+    charts = page.locator("figure.chart svg")
+    assert charts.count() >= 3
+    assert page.locator("figure.chart").first.locator("rect").count() == 5  # Blaze's five laps
+    assert page.locator("figure.chart").nth(1).locator("circle").count() == 10  # ten actions
+    shot(page, "racer-page-1280x900")
+
+
+def test_the_compare_page_marks_the_differences(served: Served, new_page: Any) -> None:
+    served.drboard("push", *RUNS)
+    page = new_page(1280, 900)
+    page.goto(f"{served.url}/boards/{BOARD}/compare/view?racer=Blaze&racer=Indy")
+    expect(page.locator("h1")).to_have_text("Blaze vs Indy")
+    differing = page.locator("tr.differs th").all_inner_texts()
+    assert any(text.lower().startswith("algorithm") for text in differing)
+    assert page.locator("tr:not(.differs) th", has_text="sensors").count() == 1
+    shot(page, "compare-1280x900")
+    page.goto(f"{served.url}/boards/{BOARD}/insights/view?top=2")
+    expect(page.locator("h1")).to_have_text("What the fast models share")
+    shot(page, "insights-1280x900")

@@ -643,3 +643,47 @@ def test_a_board_can_keep_flagged_runs_off_the_ranking(drboard: Drboard) -> None
     assert drboard.boards()["strict"]["flagged_runs"] == "unranked"
     relaxed = drboard.ok("board", "update", "strict", "--flagged-runs", "rank")
     assert "Flagged runs" in relaxed and "unranked" not in relaxed
+
+
+# ---- compare and insights -----------------------------------------------------------------------
+
+
+@pytest.mark.usefixtures("pushed")
+def test_compare_shows_two_designs_and_marks_the_differences(drboard: Drboard) -> None:
+    compared = drboard.json("compare", "Blaze", "indy", "--track", "reInvent2019")
+    assert [r["racer"] for r in compared["racers"]] == ["Blaze", "Indy"]
+    assert "algorithm" in compared["differences"] and "action_space" in compared["differences"]
+    assert [r["facts"]["algorithm"] for r in compared["racers"]] == ["clipped_ppo", "sac"]
+    table = drboard.ok("compare", "Blaze", "Indy", "--track", "reInvent2019")
+    assert "Blaze (#1" in table and "Indy (#2" in table
+    assert next(line for line in table.splitlines() if "algorithm" in line).lstrip("│ ").startswith("≠")
+
+
+@pytest.mark.usefixtures("pushed")
+def test_compare_needs_two_to_four_racers_on_the_board(drboard: Drboard) -> None:
+    assert drboard("compare", "Blaze", "--track", "reInvent2019").exit_code == 2
+    missing = drboard("compare", "Blaze", "Nobody", "--track", "reInvent2019")
+    assert missing.exit_code == 1 and "Nobody" in missing.stderr
+
+
+@pytest.mark.usefixtures("pushed")
+def test_insights_set_the_fastest_models_against_the_field(drboard: Drboard) -> None:
+    found = drboard.json("insights", "--track", "reInvent2019", "--top", "2")
+    assert (found["top"], found["field"]) == (2, len(COUNTER_CLOCKWISE))
+    facts = {fact["fact"]: fact for fact in found["facts"]}
+    assert facts["max_speed"]["top"] == "4"  # Blaze and Indy both top out at 4 m/s
+    assert [p["racer"] for p in found["points"] if p["top"]] == ["Blaze", "Indy"]
+    table = drboard.ok("insights", "--track", "reInvent2019", "--top", "2")
+    assert "Top 2" in table and "top speed (m/s)" in table
+
+
+def test_a_board_that_keeps_designs_private_shows_times_only(drboard: Drboard) -> None:
+    create_event(drboard, "--designs", "after-close")
+    for example in COUNTER_CLOCKWISE[:2]:
+        drboard.ok("push", example, "--board", "event")
+    assert "private until the board closes" in drboard.ok("pull", "--board", "event")
+    assert all(e["design"] is None for e in drboard.json("pull", "--board", "event")["entries"])
+    refused = drboard("compare", "Blaze", "Comet", "--board", "event")
+    assert refused.exit_code == 1 and "private until it closes" in refused.stderr
+    drboard.ok("board", "update", "event", "--designs", "public")
+    assert "PPO" in drboard.ok("pull", "--board", "event")

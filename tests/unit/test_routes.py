@@ -106,16 +106,18 @@ class Client:
         self.service = service
 
     def request(self, method: str, path: str, *, body: str | None = None,
-                query: dict[str, str] | None = None,
+                query: dict[str, str | list[str]] | None = None,
                 headers: dict[str, str] | None = None,
                 authorizer: dict[str, Any] | None = IAM_ORGANISER) -> dict[str, Any]:
         event: dict[str, Any] = {
             "version": "2.0",
             "routeKey": "$default",
             "rawPath": path,
-            "rawQueryString": urlencode(query or {}),
+            "rawQueryString": urlencode(query or {}, doseq=True),
             "headers": {"content-type": "application/json"} | (headers or {}),
-            "queryStringParameters": query,
+            # API Gateway joins a repeated parameter's values with commas
+            "queryStringParameters": {name: value if isinstance(value, str) else ",".join(value)
+                                      for name, value in query.items()} if query else None,
             "requestContext": {
                 "accountId": "123456789012", "apiId": "local", "requestId": "r1",
                 "http": {"method": method, "path": path, "protocol": "HTTP/1.1",
@@ -140,7 +142,7 @@ class Client:
             body = record
         return self.request("POST", f"/boards/{quote(board, safe='')}/submissions", body=body)
 
-    def get(self, path: str, **query: str) -> dict[str, Any]:
+    def get(self, path: str, **query: str | list[str]) -> dict[str, Any]:
         return self.request("GET", path, query=query or None)
 
     def send(self, method: str, path: str, body: Any = None, **query: str) -> dict[str, Any]:
@@ -1118,3 +1120,94 @@ def test_a_board_closing_by_the_clock_changes_the_etag(client: Client) -> None:
 def test_if_none_match_on_a_board_that_does_not_exist_is_404(client: Client) -> None:
     response = client.request("GET", "/boards/nowhere", headers={"if-none-match": '"x"'})
     assert response["statusCode"] == 404
+
+
+# ---- racer pages, compare and insights ---------------------------------------------------------
+
+
+def test_compare_marks_what_two_designs_differ_on(client: Client) -> None:
+    client.push(make_record("Ada", lap(12000), max_speed=4.0))
+    client.push(make_record("Bob", lap(13000), max_speed=3.0))
+    response = client.get(f"/boards/{TRACK}/compare", racer=["Ada", "bob"])
+    assert response["statusCode"] == 200, response["body"]
+    compared = body(response)
+    assert [r["racer"] for r in compared["racers"]] == ["Ada", "Bob"]
+    assert [r["entry"]["rank"] for r in compared["racers"]] == [1, 2]
+    assert compared["differences"] == ["max_speed", "min_speed"]
+    assert [r["facts"]["max_speed"] for r in compared["racers"]] == [4.0, 3.0]
+
+
+def test_compare_needs_two_racers_with_entries(client: Client) -> None:
+    client.push(make_record("Ada", lap(12000)))
+    assert client.get(f"/boards/{TRACK}/compare", racer=["Ada"])["statusCode"] == 400
+    missing = client.get(f"/boards/{TRACK}/compare", racer=["Ada", "Nobody"])
+    assert missing["statusCode"] == 404
+
+
+def test_insights_set_the_top_against_the_field(client: Client) -> None:
+    for n, (racer, speed) in enumerate([("Ada", 4.0), ("Bob", 4.0), ("Cy", 2.0), ("Di", 2.0)]):
+        client.push(make_record(racer, lap(10000 + 1000 * n), max_speed=speed))
+    insights = body(client.get(f"/boards/{TRACK}/insights", top="2"))
+    assert (insights["top"], insights["field"]) == (2, 4)
+    facts = {fact["fact"]: fact for fact in insights["facts"]}
+    assert (facts["max_speed"]["top"], facts["max_speed"]["field"]) == ("4", "3")
+    assert facts["algorithm"]["top_share"] == 1.0
+    assert [(p["racer"], p["top"]) for p in insights["points"]] == [
+        ("Ada", True), ("Bob", True), ("Cy", False), ("Di", False)]
+
+
+def test_the_racer_page_draws_laps_action_space_and_history(client: Client) -> None:
+    client.push(make_record("Ada", [(12000, 100), (15000, 40), (11800, 100)]))
+    client.push(make_record("Ada", lap(11000), model="faster"))
+    response = client.get(f"/boards/{TRACK}/racers/ada/view")
+    assert response["statusCode"] == 200
+    page = response["body"]
+    assert "<h1>Ada</h1>" in page and "#1 on Smile Speedway" in page
+    assert page.count("<figure class=\"chart\">") >= 3  # laps, action space, submissions
+    assert "Lap times of Ada" in page and "Action space" in page
+    assert "★ counts" in page and page.count("<tr><td>") == 2
+    assert "discount factor" in page and "0.99" in page
+
+
+def test_the_compare_and_insights_pages(client: Client) -> None:
+    client.push(make_record("Ada", lap(12000), max_speed=4.0))
+    client.push(make_record("<b>Bob</b>", lap(13000), max_speed=3.0))
+    compare = client.get(f"/boards/{TRACK}/compare/view", racer=["Ada", "<b>Bob</b>"])
+    assert compare["statusCode"] == 200
+    differs = '<tr class="differs"><th scope="row">top speed (m/s)</th><td>4</td><td>3</td></tr>'
+    assert differs in compare["body"]
+    assert "<b>" not in compare["body"]
+    insights = client.get(f"/boards/{TRACK}/insights/view")
+    assert insights["statusCode"] == 200 and "Top speed against time" in insights["body"]
+
+
+def test_a_board_can_keep_designs_private_until_it_closes(client: Client) -> None:
+    closes = T0 + timedelta(hours=1)
+    create_cup(client, designs="after-close", closes_at=closes.isoformat())
+    client.push(make_record("Ada", lap(12000), max_speed=4.0), board=CUP)
+    client.push(make_record("Bob", lap(13000)), board=CUP)
+    page = body(client.get(f"/boards/{CUP}"))
+    assert page["board"]["designs"] == "after-close"
+    assert [e["design"] for e in page["entries"]] == [None, None]
+    racer = body(client.get(f"/boards/{CUP}/racers/Ada"))
+    assert racer["record"] is None and racer["entry"]["design"] is None
+    for path in (f"/boards/{CUP}/compare", f"/boards/{CUP}/insights"):
+        refused = client.get(path, racer=["Ada", "Bob"])
+        assert refused["statusCode"] == 403 and body(refused)["error"] == "DesignsPrivate"
+    view = client.get(f"/boards/{CUP}/view")["body"]
+    assert "private until the board closes" in view and "PPO" not in view
+    assert "private until the board closes" in client.get(f"/boards/{CUP}/racers/Ada/view")["body"]
+
+    client.clock.advance(2 * 3600)
+    assert body(client.get(f"/boards/{CUP}"))["entries"][0]["design"]["max_speed"] == 4.0
+    assert body(client.get(f"/boards/{CUP}/racers/Ada"))["record"] is not None
+    assert client.get(f"/boards/{CUP}/compare", racer=["Ada", "Bob"])["statusCode"] == 200
+
+
+def test_designs_can_be_made_public_again(client: Client) -> None:
+    create_cup(client, designs="after-close")
+    client.push(make_record("Ada", lap(12000)), board=CUP)
+    assert body(client.get(f"/boards/{CUP}"))["entries"][0]["design"] is None
+    changed = client.send("PATCH", f"/boards/{CUP}", {"designs": "public"})
+    assert changed["statusCode"] == 200 and body(changed)["designs"] == "public"
+    assert body(client.get(f"/boards/{CUP}"))["entries"][0]["design"] is not None

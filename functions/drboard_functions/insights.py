@@ -1,0 +1,108 @@
+"""How the fast models were built: a design's facts, what two designs differ on, and what the top
+models share against the field. Pure functions of records; the service fetches them."""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from statistics import median
+from typing import Any
+
+from drboard_assembler.record import Record
+
+from .display import algorithm_name
+from .models import DesignFacts, SharedFact
+
+#: The facts insights summarise, with how people read them (in this order).
+LABELS = {
+    "algorithm": "algorithm",
+    "action_space": "action space",
+    "actions": "actions",
+    "max_speed": "top speed (m/s)",
+    "min_speed": "lowest speed (m/s)",
+    "max_steering": "steering range (±°)",
+    "sensors": "sensors",
+    "neural_network": "network",
+    "discount_factor": "discount factor",
+    "learning_rate": "learning rate",
+    "batch_size": "batch size",
+    "entropy": "entropy",
+    "epochs": "epochs",
+    "episodes_between_training": "episodes per training",
+    "loss_type": "loss",
+    "training_time_s": "training time (s)",
+    "training_episodes": "training episodes",
+}
+CHOICES = {"algorithm", "action_space", "sensors", "neural_network", "loss_type"}
+
+
+def design_facts(record: Record) -> DesignFacts:
+    design, space = record.design, record.design.action_space
+    hyper = design.hyperparameters
+    speeds = ([a.speed for a in space.actions] if space.actions
+              else [space.speed.low] if space.speed else [])
+    return DesignFacts(
+        algorithm=design.algorithm,
+        action_space=space.type,
+        actions=len(space.actions) if space.actions else None,
+        max_speed=space.max_speed,
+        min_speed=min(speeds) if speeds else None,
+        max_steering=space.max_steering,
+        sensors=sorted(design.sensors),
+        neural_network=design.neural_network,
+        discount_factor=hyper.discount_factor,
+        learning_rate=hyper.lr,
+        batch_size=hyper.batch_size,
+        entropy=hyper.beta_entropy,
+        epochs=hyper.num_epochs,
+        episodes_between_training=hyper.num_episodes_between_training,
+        loss_type=hyper.loss_type,
+        training_time_s=record.training.training_time_s if record.training else None,
+        training_episodes=record.training.episodes if record.training else None,
+    )
+
+
+def differences(facts: Sequence[DesignFacts]) -> list[str]:
+    """The facts on which the designs do not all agree, in LABELS order."""
+    dumped = [f.model_dump() for f in facts]
+    return [name for name in LABELS if len({_key(d[name]) for d in dumped}) > 1]
+
+
+def shared_facts(top: Sequence[DesignFacts], field: Sequence[DesignFacts]) -> list[SharedFact]:
+    """Each fact of the top designs against the field's: the most common choice and its share,
+    or the median number. Facts no design states are left out."""
+    shared = []
+    for name, label in LABELS.items():
+        top_values = [v for f in top if (v := getattr(f, name)) is not None]
+        field_values = [v for f in field if (v := getattr(f, name)) is not None]
+        if not top_values or not field_values:
+            continue
+        if name in CHOICES:
+            choice, count = Counter(_key(v) for v in top_values).most_common(1)[0]
+            in_field = sum(1 for v in field_values if _key(v) == choice)
+            shared.append(SharedFact(fact=name, label=label, top=fact_text(name, choice),
+                                     field=fact_text(name, choice),
+                                     top_share=round(count / len(top_values), 3),
+                                     field_share=round(in_field / len(field_values), 3)))
+        else:
+            shared.append(SharedFact(fact=name, label=label,
+                                     top=fact_text(name, median(top_values)),
+                                     field=fact_text(name, median(field_values))))
+    return shared
+
+
+def fact_text(name: str, value: Any) -> str:
+    """A fact's value as people read it."""
+    if value is None:
+        return "—"
+    if name == "algorithm":
+        return algorithm_name(str(value))
+    if isinstance(value, tuple | list):
+        return ", ".join(value) or "none"
+    if isinstance(value, float):
+        return f"{value:g}" if name != "training_time_s" else f"{value:.0f}"
+    return str(value)
+
+
+def _key(value: Any) -> Any:
+    return tuple(value) if isinstance(value, list) else value
