@@ -174,3 +174,18 @@ def test_the_compare_page_marks_the_differences(served: Served, new_page: Any) -
     page.goto(f"{served.url}/boards/{BOARD}/insights/view?top=2")
     expect(page.locator("h1")).to_have_text("What the fast models share")
     shot(page, "insights-1280x900")
+
+
+def test_the_big_screen_scrolls_through_a_long_board(served: Served, new_page: Any) -> None:
+    from tests.recordkit import make_record
+
+    for n in range(40):
+        record = make_record(f"Racer {n:02d}", [(9000 + 37 * n, 100)])
+        status, _ = served.post(f"/boards/{BOARD}/submissions", record.model_dump_json().encode())
+        assert status == 201
+    page = new_page(1920, 1080)
+    page.goto(f"{served.url}/boards/{BOARD}/view?screen=1")
+    expect(page.locator("tr[data-racer]")).to_have_count(40)
+    assert page.evaluate("window.scrollY") == 0
+    page.wait_for_timeout(6000)  # a pause at the top, then the page moves on by itself
+    assert page.evaluate("window.scrollY") > 0
