@@ -443,7 +443,7 @@ def _action_space_chart(record: Record) -> str:
 
 def error_page(status: int, phrase: str, message: str) -> str:
     return _document(f"{status} {phrase} · drboard", phrase, message,
-                     '<p><a href="/">All boards</a></p>', refresh=False)
+                     '<p><a href="/">All boards</a></p>')
 
 
 def rules_line(board: BoardView) -> str:
@@ -528,11 +528,11 @@ def _entry_row(board_id: str, entry: EntryView) -> str:
     )
 
 
-def _document(title: str, heading: str, subtitle: str, body: str, refresh: bool = True,
-              live: str = "") -> str:
-    meta_refresh = f'<meta http-equiv="refresh" content="{REFRESH_S}">' if refresh else ""
-    if live:  # the script keeps the page up to date; the refresh is for browsers without it
-        meta_refresh = f"<noscript>{meta_refresh}</noscript>"
+def _document(title: str, heading: str, subtitle: str, body: str, live: str = "") -> str:
+    # A live page keeps itself up to date with its script; browsers without script reload it.
+    # Other pages never reload by themselves (a timed reload is an accessibility barrier).
+    meta_refresh = (f'<noscript><meta http-equiv="refresh" content="{REFRESH_S}"></noscript>'
+                    if live else "")
     script = f"<script>{LIVE_SCRIPT}</script>" if live else ""
     status = '<p id="live" role="status" aria-live="polite"></p>' if live else ""
     return (

@@ -189,3 +189,27 @@ def test_the_big_screen_scrolls_through_a_long_board(served: Served, new_page: A
     assert page.evaluate("window.scrollY") == 0
     page.wait_for_timeout(6000)  # a pause at the top, then the page moves on by itself
     assert page.evaluate("window.scrollY") > 0
+
+
+AXE = Path(__file__).parents[2] / "node_modules" / "axe-core" / "axe.min.js"
+
+
+@pytest.mark.skipif(not AXE.is_file(), reason="axe-core not installed (npm install axe-core)")
+@pytest.mark.parametrize("path", [
+    f"/boards/{BOARD}/view", f"/boards/{BOARD}/view?screen=1", f"/boards/{BOARD}/racers/Blaze/view",
+    f"/boards/{BOARD}/compare/view?racer=Blaze&racer=Indy", f"/boards/{BOARD}/insights/view", "/",
+])
+def test_the_pages_pass_an_accessibility_check(browser: Any, served: Served, path: str) -> None:
+    """axe-core's WCAG 2 A and AA rules: contrast, headings, labels, names of images."""
+    served.drboard("push", *RUNS)
+    context = browser.new_context(bypass_csp=True)  # to inject axe-core; the page's own CSP is
+    try:                                            # tested elsewhere
+        page = context.new_page()
+        page.goto(served.url + path)
+        page.add_script_tag(path=str(AXE))
+        result = page.evaluate("axe.run(document, {runOnly: ['wcag2a', 'wcag2aa']})")
+        problems = [(v["id"], v["help"], [n["target"] for n in v["nodes"]][:3])
+                    for v in result["violations"]]
+        assert problems == []
+    finally:
+        context.close()
