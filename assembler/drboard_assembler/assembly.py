@@ -149,8 +149,12 @@ def _assemble_folder(root: Path, where: str, overrides: Overrides, default_model
         if named is not None or foreign:
             run = run.model_copy(update={"named_by_params": named is not None})
         runs.append((run, named))
-    if not runs:  # laps from the evaluation logs, where no metrics file is present
-        for log in evaluation_logs:
+    # Laps from the evaluation logs whose metrics file is not present (a log-only download, or
+    # a console download's leaderboard races, which come without their metrics files).
+    present = {p.name for p in files.evaluation_metrics}
+    for log in evaluation_logs if evaluation is None else []:
+        metrics_file = log.params.metrics_file if log.params is not None else None
+        if not present or (metrics_file is not None and metrics_file not in present):
             _note_log(reader, log)
             runs.append((EvaluationRun.from_laps(log.name, log.laps()), log.params))
 

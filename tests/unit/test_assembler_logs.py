@@ -95,6 +95,24 @@ def test_the_params_a_log_printed_name_the_run_of_a_metrics_file(tmp_path: Path)
     assert record.evaluations[0].named_by_params is True
 
 
+def test_a_leaderboard_race_logged_without_its_metrics_file_is_one_more_run(tmp_path: Path) -> None:
+    """A console download keeps leaderboard races' logs but not their metrics files: each such
+    log is an evaluation run of its own; a log whose metrics file is present adds nothing."""
+    run = tmp_path / "download"
+    shutil.copytree(EXAMPLES / CONSOLE, run)
+    logkit.write(run / "logs" / "evaluation" / "evaluation-20210412113020-robomaker.log",
+                 logkit.simulation_log(logkit.job_params(metrics_key=f"x/{EVALUATION}"),
+                                       [(99.0, "lap_complete")]))
+    race = "leaderboard/evaluation-20210501093000-RaCe.json"
+    logkit.write(run / "logs" / "leaderboard" / "leaderboard-20210501093500-RaCe-robomaker.log",
+                 logkit.simulation_log(logkit.job_params(metrics_key=race),
+                                       [(8.5, "lap_complete"), (4.0, "off_track")]))
+    record = assemble(run)
+    assert [evaluation.source for evaluation in record.evaluations] == [
+        EVALUATION, "logs/leaderboard/leaderboard-20210501093500-RaCe-robomaker.log"]
+    assert [round(lap.time_ms / 100) for lap in record.evaluations[1].laps] == [85, 40]
+
+
 def test_a_training_only_archive_is_told_it_holds_no_evaluation(tmp_path: Path) -> None:
     run = tmp_path / "training-only"
     logkit.write(run / "logs" / "training" / "training-20240501080000-Tr41-robomaker.log",
