@@ -12,6 +12,8 @@ from dataclasses import dataclass
 from html import escape
 
 WIDTH, HEIGHT, PAD = 640, 280, 44
+LEFT = 76  # room for the y axis's tick labels (e.g. "100.873")
+INSET = 12  # points at the ends of a range stay clear of the axes
 AXIS, GRID, MARK, HIGHLIGHT, DIM = "#9aa7b4", "#26313d", "#7cc4ff", "#ffd24d", "#5b6773"
 
 
@@ -34,11 +36,11 @@ class Point:
 def bars(title: str, caption: str, items: Sequence[Bar], unit: str) -> str:
     """Vertical bars from zero; weak bars (e.g. unfinished laps) are drawn dim."""
     top = max((b.value for b in items), default=1) or 1
-    width = (WIDTH - 2 * PAD) / max(1, len(items))
+    width = (WIDTH - LEFT - PAD) / max(1, len(items))
     shapes = []
     for index, bar in enumerate(items):
         height = (HEIGHT - 2 * PAD) * bar.value / top
-        x = PAD + index * width
+        x = LEFT + index * width
         y = HEIGHT - PAD - height
         shapes.append(
             f'<rect x="{x + width * .15:.1f}" y="{y:.1f}" width="{width * .7:.1f}" '
@@ -61,8 +63,8 @@ def points(title: str, caption: str, items: Sequence[Point], x_label: str, y_lab
     ys = [p.y for p in items] + ([area[2], area[3]] if area else [])
     x0, x1 = x_range or (min(xs, default=0), max(xs, default=1))
     y0, y1 = y_range or (min(ys, default=0), max(ys, default=1))
-    sx = _scale(x0, x1, PAD, WIDTH - PAD)
-    sy = _scale(y0, y1, HEIGHT - PAD, PAD)
+    sx = _scale(x0, x1, LEFT + INSET, WIDTH - PAD - INSET)
+    sy = _scale(y0, y1, HEIGHT - PAD - INSET, PAD + INSET)
     shapes = []
     if area:
         left, right = sorted((sx(area[0]), sx(area[1])))
@@ -73,10 +75,10 @@ def points(title: str, caption: str, items: Sequence[Point], x_label: str, y_lab
         colour = HIGHLIGHT if point.strong else MARK
         shapes.append(f'<circle cx="{sx(point.x):.1f}" cy="{sy(point.y):.1f}" r="6" '
                       f'fill="{colour}"><title>{escape(point.label)}</title></circle>')
-    ticks = (f'<text x="{PAD}" y="{HEIGHT - PAD + 16}" text-anchor="middle">{x0:g}</text>'
-             f'<text x="{WIDTH - PAD}" y="{HEIGHT - PAD + 16}" text-anchor="middle">{x1:g}</text>'
-             f'<text x="{PAD - 6}" y="{HEIGHT - PAD}" text-anchor="end">{y0:g}</text>'
-             f'<text x="{PAD - 6}" y="{PAD + 4}" text-anchor="end">{y1:g}</text>')
+    ticks = (f'<text x="{sx(x0):.1f}" y="{HEIGHT - PAD + 16}" text-anchor="middle">{x0:g}</text>'
+             f'<text x="{sx(x1):.1f}" y="{HEIGHT - PAD + 16}" text-anchor="middle">{x1:g}</text>'
+             f'<text x="{LEFT - 6}" y="{sy(y0) + 4:.1f}" text-anchor="end">{y0:g}</text>'
+             f'<text x="{LEFT - 6}" y="{sy(y1) + 4:.1f}" text-anchor="end">{y1:g}</text>')
     return _figure(title, caption, _axes(y_label, x_label) + ticks + "".join(shapes))
 
 
@@ -86,11 +88,11 @@ def line(title: str, caption: str, values: Sequence[tuple[float, float]], x_labe
     if not values:
         return ""
     xs, ys = [x for x, _ in values], [y for _, y in values]
-    sx = _scale(min(xs), max(xs), PAD, WIDTH - PAD)
+    sx = _scale(min(xs), max(xs), LEFT, WIDTH - PAD)
     sy = _scale(min(ys), max(ys), HEIGHT - PAD, PAD)
     path = " ".join(f"{sx(x):.1f},{sy(y):.1f}" for x, y in values)
-    ticks = (f'<text x="{PAD - 6}" y="{HEIGHT - PAD}" text-anchor="end">{min(ys):g}</text>'
-             f'<text x="{PAD - 6}" y="{PAD + 4}" text-anchor="end">{max(ys):g}</text>'
+    ticks = (f'<text x="{LEFT - 6}" y="{HEIGHT - PAD}" text-anchor="end">{min(ys):g}</text>'
+             f'<text x="{LEFT - 6}" y="{PAD + 4}" text-anchor="end">{max(ys):g}</text>'
              f'<text x="{WIDTH - PAD}" y="{HEIGHT - PAD + 16}" text-anchor="middle">{max(xs):g}</text>')
     return _figure(title, caption, _axes(y_label, x_label) + ticks +
                    f'<polyline points="{path}" fill="none" stroke="{MARK}" stroke-width="2.5"/>')
@@ -102,10 +104,10 @@ def _scale(low: float, high: float, start: float, end: float) -> Callable[[float
 
 
 def _axes(y_label: str, x_label: str) -> str:
-    return (f'<line x1="{PAD}" y1="{HEIGHT - PAD}" x2="{WIDTH - PAD}" y2="{HEIGHT - PAD}" '
-            f'stroke="{GRID}"/><line x1="{PAD}" y1="{PAD}" x2="{PAD}" y2="{HEIGHT - PAD}" '
+    return (f'<line x1="{LEFT}" y1="{HEIGHT - PAD}" x2="{WIDTH - PAD}" y2="{HEIGHT - PAD}" '
+            f'stroke="{GRID}"/><line x1="{LEFT}" y1="{PAD}" x2="{LEFT}" y2="{HEIGHT - PAD}" '
             f'stroke="{GRID}"/>'
-            f'<text x="{PAD}" y="{PAD - 14}">{escape(y_label)}</text>'
+            f'<text x="{LEFT}" y="{PAD - 14}">{escape(y_label)}</text>'
             f'<text x="{WIDTH - PAD}" y="{HEIGHT - 6}" text-anchor="end">{escape(x_label)}</text>')
 
 

@@ -71,6 +71,7 @@ table{{border-collapse:collapse;width:100%;font-variant-numeric:tabular-nums}}
 th,td{{padding:.45rem .6rem;text-align:left;border-bottom:1px solid #26313d;vertical-align:top}}
 th{{color:{MUTED};font-weight:600}}
 thead th{{font-size:.85rem;text-transform:uppercase;letter-spacing:.03em}}
+.as-written{{text-transform:none}}
 td.num,th.num{{text-align:right;white-space:nowrap}}
 td.rank{{font-weight:700}}
 td.rank span{{display:inline-block;min-width:1.6em;text-align:center;border-radius:.3em}}
@@ -341,7 +342,8 @@ def compare_page(comparison: Comparison) -> str:
     board = comparison.board
     names = [c.racer for c in comparison.racers]
     head = "".join(f'<th scope="col">{escape(c.racer)} (#{c.entry.rank}, '
-                   f"{escape(seconds(c.entry.time_ms))})</th>" for c in comparison.racers)
+                   f'<span class="as-written">{escape(seconds(c.entry.time_ms))}</span>)</th>'
+                   for c in comparison.racers)
     rows = []
     for fact, label in LABELS.items():
         cells = "".join(f"<td>{escape(fact_text(fact, getattr(c.facts, fact)))}</td>"
