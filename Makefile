@@ -39,7 +39,7 @@ build-PushFunction build-PullFunction build-AdminFunction:
 	@$(LAMBDA_PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' || { \
 		echo "LAMBDA_PYTHON=$(LAMBDA_PYTHON) is not Python 3.13, the runtime's: the .pyc would" \
 		"not load. Put python3.13 on PATH or pass LAMBDA_PYTHON=/path/to/python3.13." >&2; exit 1; }
-	python3 -m pip install $(PIP_TARGET_FLAGS) --target "$(ARTIFACTS_DIR)" -r functions/requirements.txt
+	python3 -m pip install $(PIP_TARGET_FLAGS) --no-deps --target "$(ARTIFACTS_DIR)" -r functions/requirements.lock
 	cd "$(ARTIFACTS_DIR)" && rm -rf $(RUNTIME_PROVIDED) $(UNUSED)
 	cp -R assembler/drboard_assembler functions/drboard_functions "$(ARTIFACTS_DIR)/"
 	cd "$(ARTIFACTS_DIR)" && rm -rf bin *-stubs
@@ -47,3 +47,14 @@ build-PushFunction build-PullFunction build-AdminFunction:
 	rm -rf "$(ARTIFACTS_DIR)"/*.dist-info/RECORD
 	cd "$(ARTIFACTS_DIR)" && $(LAMBDA_PYTHON) -m compileall -q -j 0 --invalidation-mode checked-hash \
 		-x '$(NOT_PRECOMPILED)' $(PRECOMPILED)
+
+# functions/requirements.lock pins every package the functions ship (functions/requirements.txt
+# resolved for the runtime, less what the runtime brings). Run after changing requirements.txt.
+lock:
+	python3 -m pip install --quiet uv
+	python3 -m uv pip compile functions/requirements.txt --python-version 3.13 \
+		--python-platform aarch64-manylinux_2_17 --no-annotate --custom-compile-command "make lock" \
+		$(addprefix --no-emit-package ,boto3 botocore s3transfer urllib3 python-dateutil jmespath six) \
+		--output-file functions/requirements.lock
+
+.PHONY: lock
