@@ -188,7 +188,7 @@ COMMANDS: dict[str, LazyCommand] = {
           ("status", "status", "Where a racer stands on each board they pushed to.")),
     **_at("organisers",
           ("board", "board_group", "Organisers: create, update, close, delete and restore named "
-                                   "boards."),
+                                   "boards, and moderate any board."),
           ("audit", "audit", "Every accepted push and every organiser action on BOARD: who, when, "
                              "what (organisers)."),
           ("export", "export_command", "Write a board as JSON lines: a backup, or a move to "

@@ -19,11 +19,12 @@ FORMAT_HELP = "table for people, json for scripts (the README documents its fiel
 
 @click.group(name="board")
 def board_group() -> None:
-    """Organisers: create, update, close, delete and restore named boards.
+    """Organisers: create, update, close, delete and restore named boards, and moderate any board.
 
     A named board has its own track, timing method, window and per-racer limits; racers push to
-    it with `drboard push PATH --board ID`. On a deployed board these calls are signed with your
-    AWS credentials and need an IAM policy allowing them; reading stays public.
+    it with `drboard push PATH --board ID`. On a deployed board these calls need an organiser's
+    sign-in (`drboard login`) or, without one, are signed with your AWS credentials, which need
+    an IAM policy allowing them; reading stays public.
     """
 
 
