@@ -108,11 +108,9 @@ pass_context = click.make_pass_decorator(Context)
 
 
 def fail(message: str, code: int) -> None:
-    """One line on standard error, then exit with ``code``."""
-    from rich.markup import escape
-
-    one_line = " ".join(message.split())
-    err().print(f"[bold red]error:[/] {escape(one_line)}", soft_wrap=True, markup=True, highlight=False)
+    """One line on standard error, then exit with ``code``. Printed with click, not rich: an
+    error answers without loading rich's console."""
+    click.echo(f"{click.style('error:', fg='red', bold=True)} {' '.join(message.split())}", err=True)
     sys.exit(code)
 
 
