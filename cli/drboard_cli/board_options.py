@@ -14,11 +14,12 @@ from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 import click
-from drboard_functions.display import duration
-from drboard_functions.models import BoardChanges, BoardSpec
-from pydantic import BaseModel, ValidationError
 
-M = TypeVar("M", bound=BaseModel)
+if TYPE_CHECKING:  # the models load when a board is created or changed, not for --help
+    from drboard_functions.models import BoardChanges, BoardSpec
+    from pydantic import BaseModel
+
+M = TypeVar("M", bound="BaseModel")
 
 
 class _Clear:
@@ -104,6 +105,8 @@ class Duration(_OptionType):
         self.longest_s = longest_s
 
     def parse(self, text: str) -> int:
+        from drboard_functions.display import duration
+
         total_s = parse_duration(text)
         if total_s > self.longest_s:
             raise ValueError(f"{text!r} is longer than the longest allowed, {duration(self.longest_s)}")
@@ -142,6 +145,8 @@ _FIELD_OF_OPTION = {
 
 def board_spec(options: Mapping[str, Any]) -> BoardSpec:
     """A new board from the options of ``drboard board create`` (unset ones take the defaults)."""
+    from drboard_functions.models import BoardSpec
+
     fields = {_FIELD_OF_OPTION[name]: value for name, value in options.items() if value is not None}
     opens_at, closes_at = fields.get("opens_at"), fields.get("closes_at")
     if opens_at and closes_at and closes_at <= opens_at:
@@ -151,6 +156,8 @@ def board_spec(options: Mapping[str, Any]) -> BoardSpec:
 
 def board_changes(options: Mapping[str, Any]) -> BoardChanges:
     """An update with only the options given; ``none`` clears (a cooldown cleared is no cooldown)."""
+    from drboard_functions.models import BoardChanges
+
     fields: dict[str, Any] = {}
     for name, value in options.items():
         if value is None:
@@ -165,6 +172,8 @@ def board_changes(options: Mapping[str, Any]) -> BoardChanges:
 
 
 def _validated(model: type[M], fields: dict[str, Any]) -> M:
+    from pydantic import ValidationError
+
     try:
         return model.model_validate(fields)
     except ValidationError as error:

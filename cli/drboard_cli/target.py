@@ -5,28 +5,29 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
-from drboard_assembler.record import Record
-from drboard_functions.models import (
-    AuditPage,
-    Board,
-    BoardChanges,
-    BoardPage,
-    BoardSpec,
-    BoardView,
-    Comparison,
-    ExportPage,
-    HistoryItem,
-    ImportedSubmission,
-    ImportReceipt,
-    Insights,
-    Me,
-    Moderation,
-    PushReceipt,
-    RacerSummary,
-    RacerView,
-)
+if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` imports no model
+    from drboard_assembler.record import Record
+    from drboard_functions.models import (
+        AuditPage,
+        Board,
+        BoardChanges,
+        BoardPage,
+        BoardSpec,
+        BoardView,
+        Comparison,
+        ExportPage,
+        HistoryItem,
+        ImportedSubmission,
+        ImportReceipt,
+        Insights,
+        Me,
+        Moderation,
+        PushReceipt,
+        RacerSummary,
+        RacerView,
+    )
 
 
 class BoardClient(Protocol):

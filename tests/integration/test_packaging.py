@@ -39,6 +39,7 @@ def test_the_track_catalog_and_record_schema_ship_with_the_package(wheel: zipfil
     assert "drboard_assembler/data/record.schema.json" in names
     assert "drboard_functions/handlers/push.py" in names
     assert "drboard_functions/stores/dynamodb.py" in names
+    assert "drboard_cli/commands/runs.py" in names
 
 
 def test_the_drboard_command_is_installed(wheel: zipfile.ZipFile) -> None:

@@ -3,6 +3,7 @@
 import re
 from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 import click
 import pytest
@@ -35,7 +36,10 @@ def test_ci_runs_the_readme_test_command() -> None:
 
 def _all_commands(group: click.Group = cli, prefix: str = "drboard") -> Iterator[tuple[str, click.Command]]:
     """Every command and subcommand, as typed: ``drboard pull``, ``drboard board create``."""
-    for name, command in sorted(group.commands.items()):
+    context = click.Context(group)
+    for name in group.list_commands(context):
+        command = group.get_command(context, name)
+        assert command is not None, name
         path = f"{prefix} {name}"
         yield path, command
         if isinstance(command, click.Group):
@@ -48,6 +52,31 @@ COMMANDS = dict(_all_commands())
 def _cli_reference() -> str:
     text = ROOT.joinpath("README.md").read_text().split("## CLI reference", 1)[1]
     return text.split("\n## ", 1)[0]
+
+
+class Entry(NamedTuple):
+    synopsis: str  # drboard board create ID --title T --track T [options]
+    text: str  # what follows it, whitespace collapsed
+
+
+def _reference_entries() -> dict[str, list[Entry]]:
+    """Each command's entries in the CLI reference: from a line opening with the command in bold
+    (**`drboard board create ID ...`**) to the next such line or heading."""
+    entries: dict[str, list[Entry]] = {}
+    for block in re.split(r"\n(?=\*\*`drboard |#)", _cli_reference()):
+        opening = re.match(r"\*\*`(drboard [^`]+)`\*\*", block)
+        if not opening:
+            continue
+        words = opening[1].split()
+        path = next((" ".join(words[:n]) for n in range(len(words), 1, -1)
+                     if " ".join(words[:n]) in COMMANDS), opening[1])
+        entries.setdefault(path, []).append(Entry(opening[1], " ".join(block[opening.end():].split())))
+    return entries
+
+
+def _options(command: click.Command) -> list[str]:
+    return [name for param in command.params for name in param.opts
+            if name.startswith("--") and name != "--help"]
 
 
 def test_the_board_commands_are_all_there() -> None:
@@ -68,10 +97,31 @@ def test_every_command_has_a_help_text(path: str) -> None:
 
 
 @pytest.mark.parametrize("path", sorted(COMMANDS))
-def test_every_command_is_in_the_cli_reference(path: str) -> None:
-    reference = _cli_reference()
-    assert f"`{path}" in reference, f"{path} is missing from the README's CLI reference"
-    for option in COMMANDS[path].params:
-        for name in option.opts:
-            if name.startswith("--") and name != "--help":
-                assert name in reference, f"{path} {name} is missing from the README's CLI reference"
+def test_every_command_has_its_entry_in_the_cli_reference(path: str) -> None:
+    """The entry opens with the command's short help (what `drboard --help` lists) and names
+    every option the command takes."""
+    entries = _reference_entries().get(path)
+    assert entries, f"{path} has no entry (a line opening with **`{path} ...`**) in the CLI reference"
+    short_help = COMMANDS[path].get_short_help_str(limit=1_000)
+    assert entries[0].text.replace("`", "").startswith(f"— {short_help.replace('`', '')}"), (
+        f"the README's entry for {path} should open with its --help: — {short_help}")
+    documented = " ".join(part for entry in entries for part in entry)
+    missing = [name for name in _options(COMMANDS[path]) if name not in documented]
+    assert not missing, f"{path}: {missing} missing from its entry in the README's CLI reference"
+
+
+def test_every_entry_of_the_cli_reference_is_a_command() -> None:
+    assert set(_reference_entries()) <= set(COMMANDS)
+
+
+def test_the_global_options_are_in_the_cli_reference() -> None:
+    global_options = _cli_reference().split("Global options", 1)[1].split("\n\n", 1)[0]
+    for name in [*_options(cli), "--version"]:
+        assert f"`{name}" in global_options, f"{name} is missing from the README's global options"
+
+
+def test_the_tests_section_gives_a_fast_unit_test_command() -> None:
+    readme = ROOT.joinpath("README.md").read_text()
+    tests = readme.split("\n## Tests", 1)[1].split("\n## ", 1)[0]
+    assert "pytest tests/unit -q" in tests
+    assert "pytest tests/unit -q" in readme.split("## Quick start", 1)[1].split("\n## ", 1)[0]

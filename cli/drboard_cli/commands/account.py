@@ -1,0 +1,155 @@
+"""Who you are and which board you use: alias, configure, login, logout, whoami and join."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from ..main import Context, edge, err, out, pass_context
+
+
+def _endpoint(ctx: Context, command: str) -> str:
+    if not ctx.endpoint:
+        raise click.UsageError(f"give the board: drboard --endpoint URL {command} (or save it "
+                               "with `drboard configure`)")
+    return str(ctx.endpoint).rstrip("/")
+
+
+@click.command()
+@click.argument("name", required=False)
+@pass_context
+def alias(ctx: Context, name: str | None) -> None:
+    """Claim NAME as the racer alias you push as, or show the one you hold.
+
+    An alias is claimed once, by one sign-in; your first push claims its racer's alias too.
+    """
+    from .. import render
+
+    with edge():
+        me = ctx.board.claim_alias(name) if name else ctx.board.me()
+        out().print(render.me_line(me), soft_wrap=True)
+
+
+@click.command()
+@click.option("--stack-name", help="Read the board's URL from this CloudFormation stack's outputs.")
+@click.option("--region", help="The stack's AWS region (default: your AWS configuration's).")
+@click.option("--endpoint", "endpoint_url", metavar="URL",
+              help="Use this board URL (a deployed API or a `drboard serve`).")
+@click.option("--local", "use_local", is_flag=True, help="Forget the saved URL: use the embedded board.")
+@click.option("--racer", help="Your racer alias, the default for `drboard history`.")
+def configure(stack_name: str | None, region: str | None, endpoint_url: str | None,
+              use_local: bool, racer: str | None) -> None:
+    """Choose the board the commands talk to, and save it in your user config folder.
+
+    With no option, shows what is saved.
+    """
+    from .. import config
+
+    with edge():
+        if sum(map(bool, (stack_name, endpoint_url, use_local))) > 1:
+            raise click.UsageError("give one of --stack-name, --endpoint or --local")
+        changes: dict[str, Any] = {}
+        if stack_name:
+            from ..cloud import stack_endpoint
+
+            changes |= {"endpoint": stack_endpoint(stack_name, region), "stack_name": stack_name}
+        elif endpoint_url:
+            if not endpoint_url.startswith(("http://", "https://")):
+                raise click.UsageError("--endpoint must be an http:// or https:// URL")
+            changes |= {"endpoint": endpoint_url.rstrip("/"), "stack_name": None}
+        elif use_local:
+            changes |= {"endpoint": None, "stack_name": None}
+        if racer:
+            changes["racer"] = racer
+        if changes:
+            config.save_settings(**changes)
+        settings = config.load_settings()
+        target = settings.get("endpoint") or f"the embedded board ({config.default_db_path()})"
+        out().print(f"Board: {target}", soft_wrap=True)
+        if settings.get("stack_name"):
+            out().print(f"Stack: {settings['stack_name']}")
+        if settings.get("racer"):
+            out().print(f"Racer: {settings['racer']}")
+        out().print(f"Saved in {config.settings_path()}", style="dim", soft_wrap=True)
+
+
+@click.command()
+@click.option("--password", "use_password", is_flag=True,
+              help="Sign in with your user name and password here, with no browser.")
+@click.option("--username", help="With --password: your user name (asked for otherwise).")
+@click.option("--no-browser", is_flag=True,
+              help="Print the sign-in page's address instead of opening a browser.")
+@pass_context
+def login(ctx: Context, use_password: bool, username: str | None, no_browser: bool) -> None:
+    """Sign in to a deployed board, as a racer or an organiser.
+
+    Opens the board's sign-in page in your browser and waits for it to send you back (to
+    http://localhost:8765/callback). With --password, asks for your user name and password here
+    instead (an invited racer's temporary password is replaced by a new one). The token is saved
+    for that board in your user config folder, readable by you only, and renewed before it
+    expires; `drboard logout` forgets it.
+    """
+    from .. import login as signing_in
+
+    with edge():
+        endpoint = _endpoint(ctx, "login")
+        settings = signing_in.require_cognito(signing_in.sign_in_settings(endpoint), endpoint)
+        if use_password:
+            name = username or click.prompt("User name")
+            password = click.prompt("Password", hide_input=True)
+            token = signing_in.login_with_password(
+                endpoint, settings, name, password,
+                new_password=lambda: click.prompt("Choose a new password", hide_input=True,
+                                                  confirmation_prompt=True))
+        else:
+            def show(url: str) -> None:
+                err().print(f"Sign in at: {url}" if no_browser else
+                            f"Opening your browser to sign in (or open {url})", soft_wrap=True)
+
+            token = signing_in.login_in_browser(endpoint, settings, show, open_browser=not no_browser)
+        out().print(f"Signed in to {endpoint} as {token.username or 'you'}.", soft_wrap=True)
+
+
+@click.command()
+@pass_context
+def logout(ctx: Context) -> None:
+    """Forget your sign-in to the board (and revoke it, on a deployed board)."""
+    from .. import login as signing_in
+
+    with edge():
+        endpoint = _endpoint(ctx, "logout")
+        forgot = signing_in.logout(endpoint)
+        out().print(f"Signed out of {endpoint}." if forgot else f"You were not signed in to {endpoint}.",
+                    soft_wrap=True)
+
+
+@click.command()
+@pass_context
+def whoami(ctx: Context) -> None:
+    """Who the board takes you for: your sign-in, whether you organise, and your racer alias."""
+    from .. import render
+
+    with edge():
+        out().print(render.me_line(ctx.board.me()), soft_wrap=True)
+
+
+@click.command()
+@click.argument("code")
+@pass_context
+def join(ctx: Context, code: str) -> None:
+    """Sign in to a `drboard serve` board with the join code its organiser shows.
+
+    Give the board with `--endpoint URL` (or `drboard configure --endpoint URL` first). The
+    token it answers is saved for that board in your user config folder, readable by you only.
+    """
+    from .. import tokens
+    from ..remote import HttpBoard
+
+    with edge():
+        board = HttpBoard(_endpoint(ctx, "join CODE"))
+        joined = board.join(code)
+        tokens.save(board.endpoint, tokens.SavedToken(kind="join", access_token=joined.token,
+                                                      username=joined.principal))
+        out().print(f"Joined {board.endpoint} as {joined.principal}. Your first push claims your "
+                    "racer alias (or claim it now with `drboard alias NAME`).", soft_wrap=True)

@@ -1,0 +1,235 @@
+"""The commands that read a board: pull, boards, compare, insights, history, show and status."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from ..main import Context, edge, out, pass_context
+
+if TYPE_CHECKING:
+    from ..target import BoardClient
+
+FORMATS = ("table", "json", "csv", "markdown")
+FORMAT_HELP = "table for people, json for scripts (the README documents its fields)."
+
+
+def _board_id(track: str | None, board: str | None) -> str:
+    from drboard_functions.service import board_for_track
+
+    if bool(track) == bool(board):
+        raise click.UsageError("give one of --track or --board")
+    return board if board else board_for_track(track or "")
+
+
+def _racer(racer: str | None) -> str:
+    from .. import config
+
+    racer = racer or config.load_settings().get("racer")
+    if not racer:
+        raise click.UsageError("give --racer (no racer has pushed from this machine yet)")
+    return str(racer)
+
+
+def format_option(command: Any) -> Any:
+    return click.option("--format", "fmt", type=click.Choice(["table", "json"]), default="table",
+                        show_default=True, help=FORMAT_HELP)(command)
+
+
+@click.command()
+@click.option("--track", help="The track whose default board to show (any of its names).")
+@click.option("--board", help="The board id to show.")
+@click.option("--top", type=click.IntRange(1, 100_000), default=25, show_default=True,
+              help="How many entries.")
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default="table", show_default=True,
+              help="table for people; json, csv or markdown for scripts and posts.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write to this file instead of the terminal.")
+@pass_context
+def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
+         output: Path | None) -> None:
+    """Show a board's standings: rank, time, gap to the leader and each model's design."""
+    with edge():
+        page = _collect(ctx.board, _board_id(track, board), top)
+        _emit(page, fmt, output)
+
+
+def _collect(client: BoardClient, board_id: str, top: int) -> Any:
+    from drboard_functions.models import MAX_PAGE
+
+    page = client.board_page(board_id, min(top, MAX_PAGE), None)
+    entries = list(page.entries)
+    cursor = page.next_cursor
+    while cursor and len(entries) < top:
+        more = client.board_page(board_id, min(top - len(entries), MAX_PAGE), cursor)
+        entries.extend(more.entries)
+        cursor = more.next_cursor
+    return page.model_copy(update={"entries": entries, "next_cursor": cursor})
+
+
+def _emit(page: Any, fmt: str, output: Path | None) -> None:
+    from .. import render
+
+    if fmt == "table":
+        if output:
+            with output.open("w", encoding="utf-8") as handle:
+                render.plain_console(handle).print(render.board_table(page))
+        elif page.entries:
+            out().print(render.board_table(page, out().width))
+        else:
+            out().print(f"{page.board.title}: no entries yet.")
+        return
+    text = {"json": render.board_json, "csv": render.board_csv,
+            "markdown": render.board_markdown}[fmt](page)
+    if output:
+        output.write_text(text, "utf-8")
+    else:
+        click.echo(text, nl=False)
+
+
+@click.command()
+@click.option("--status", "wanted", type=click.Choice(["open", "upcoming", "closed"], case_sensitive=False),
+              help="Only the boards that are open, not open yet, or closed.")
+@format_option
+@pass_context
+def boards(ctx: Context, wanted: str | None, fmt: str) -> None:
+    """List the boards: track, timing, status, window and racers."""
+    from .. import render
+
+    with edge():
+        found = [b for b in ctx.board.boards() if not wanted or b.status.value == wanted.upper()]
+        if fmt == "json":
+            click.echo(render.write_json([b.model_dump(mode="json") for b in found]), nl=False)
+        elif found:
+            out().print(render.boards_table(found, out().width))
+        elif wanted:
+            out().print(f"No {wanted.lower()} boards.")
+        else:
+            out().print("No boards yet: push a run with `drboard push PATH`.")
+
+
+@click.command()
+@click.argument("racers", nargs=-1, required=True)
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@format_option
+@pass_context
+def compare(ctx: Context, racers: tuple[str, ...], track: str | None, board: str | None,
+            fmt: str) -> None:
+    """Two to four racers' designs side by side, the facts they differ on marked ≠.
+
+    Algorithm, action space, speeds, steering, sensors, network, hyperparameters and training,
+    each racer's best model on the board.
+    """
+    from .. import render
+
+    with edge():
+        if not 2 <= len(racers) <= 4:
+            raise click.UsageError("give two to four racers")
+        comparison = ctx.board.compare(_board_id(track, board), list(racers))
+        if fmt == "json":
+            click.echo(comparison.model_dump_json(indent=2))
+        else:
+            out().print(render.comparison_table(comparison))
+
+
+@click.command()
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@click.option("--top", type=click.IntRange(1, 20), default=5, show_default=True,
+              help="How many of the fastest qualified models make the top.")
+@format_option
+@pass_context
+def insights(ctx: Context, track: str | None, board: str | None, top: int, fmt: str) -> None:
+    """What the board's fastest models share against the field.
+
+    For each design fact, the top models' most common choice (and how many made it) or their
+    median, beside the field's (the board's first 100 entries).
+    """
+    from .. import render
+
+    with edge():
+        found = ctx.board.insights(_board_id(track, board), top)
+        if fmt == "json":
+            click.echo(found.model_dump_json(indent=2))
+        else:
+            out().print(render.insights_table(found))
+
+
+def racer_options(command: Any) -> Any:
+    """--racer, --track and --board of the commands about one racer on every board (or one)."""
+    for option in reversed([
+        click.option("--racer", envvar="DRBOARD_RACER",
+                     help="The racer (default: the last racer who pushed from this machine). "
+                          "Env: DRBOARD_RACER."),
+        click.option("--track", help="Only this track's default board."),
+        click.option("--board", help="Only this board."),
+    ]):
+        command = option(command)
+    return command
+
+
+@click.command()
+@racer_options
+@format_option
+@pass_context
+def history(ctx: Context, racer: str | None, track: str | None, board: str | None,
+            fmt: str) -> None:
+    """A racer's submissions on every board, oldest first.
+
+    ★ marks each board's counted submission, the racer's best there.
+    """
+    from .. import render
+
+    with edge():
+        name = _racer(racer)
+        board_id = _board_id(track, board) if (track or board) else None
+        items = ctx.board.history(name, board_id)
+        if fmt == "json":
+            click.echo(render.write_json([i.model_dump(mode="json") for i in items]), nl=False)
+        elif items:
+            out().print(render.history_table(name, items))
+        else:
+            out().print(f"No submissions by {name} yet.")
+
+
+@click.command()
+@click.argument("racer")
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@format_option
+@pass_context
+def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: str) -> None:
+    """How a racer's best model was built: hyperparameters, action space, laps, training."""
+    from .. import render
+
+    with edge():
+        view = ctx.board.racer(_board_id(track, board), racer)
+        if fmt == "json":
+            click.echo(view.model_dump_json(indent=2))
+        else:
+            out().print(render.racer_panel(view))
+
+
+@click.command()
+@racer_options
+@format_option
+@pass_context
+def status(ctx: Context, racer: str | None, track: str | None, board: str | None, fmt: str) -> None:
+    """Where a racer stands on each board they pushed to.
+
+    For each board: the latest submission and its result, the rank and gap to the leader of the
+    racer's best, the submissions used (of the board's maximum) and when the next one is allowed.
+    """
+    from .. import render
+
+    with edge():
+        name = _racer(racer)
+        board_id = _board_id(track, board) if (track or board) else None
+        summary = ctx.board.status(name, board_id)
+        if fmt == "json":
+            click.echo(summary.model_dump_json(indent=2))
+        else:
+            out().print(render.status_table(summary))
