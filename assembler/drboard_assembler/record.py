@@ -87,7 +87,7 @@ class SourceLayout(StrEnum):
 
 class Strict(BaseModel):
     # NaN and Infinity would be stored as JSON null, and every later read of the record fail.
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, defer_build=True)
 
 
 class Lap(Strict):
