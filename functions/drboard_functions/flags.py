@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Literal
 
 from drboard_assembler.catalog import default_catalog
-from drboard_assembler.record import TOP_SPEED_BOUND_MPS, EvaluationRun, Lap, Record
+from drboard_assembler.record import TOP_SPEED_BOUND_MPS, EvaluationRun, Lap
 
 Flag = Literal["lap-timestamps", "reset-count", "params-name-another-file", "faster-than-top-speed"]
 
@@ -40,13 +40,6 @@ def run_flags(run: EvaluationRun, track: str, max_speed: float) -> list[Flag]:
     if fastest_ms is not None and any(lap.complete and lap.time_ms < fastest_ms for lap in run.laps):
         flags.append("faster-than-top-speed")
     return flags
-
-
-def record_flags(record: Record) -> dict[str, list[Flag]]:
-    """Each flagged evaluation run's flags, by its source."""
-    speed = record.design.action_space.max_speed
-    flagged = {run.source: run_flags(run, record.track, speed) for run in record.evaluations}
-    return {source: flags for source, flags in flagged.items() if flags}
 
 
 def _timestamps_disagree(lap: Lap) -> bool:

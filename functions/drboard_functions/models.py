@@ -119,10 +119,6 @@ class Board(Model):
             return BoardStatus.CLOSED
         return BoardStatus.OPEN
 
-    @property
-    def limited(self) -> bool:
-        return bool(self.cooldown_s) or self.max_submissions is not None
-
 
 def run_mismatches(track: str, direction: str | None, race_type: RaceType,
                    board: "Board | BoardView") -> list[str]:

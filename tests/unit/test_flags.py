@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 from drboard_assembler import AssemblyError, assemble
 from drboard_assembler.record import EvaluationRun, Lap, Record
-from drboard_functions.flags import record_flags
+from drboard_functions.flags import Flag, run_flags
 from drboard_functions.models import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
@@ -29,6 +29,13 @@ def with_laps(record: Record, *laps: dict[str, Any], named_by_params: bool | Non
     run = run.model_copy(update={"named_by_params": named_by_params})
     fields = record.model_dump(exclude={"submission_id", "evaluations"})
     return Record.build(**fields, evaluations=[run])
+
+
+def record_flags(record: Record) -> dict[str, list[Flag]]:
+    """Each flagged evaluation run's flags, by its source."""
+    speed = record.design.action_space.max_speed
+    flagged = {run.source: run_flags(run, record.track, speed) for run in record.evaluations}
+    return {source: flags for source, flags in flagged.items() if flags}
 
 
 @pytest.fixture
