@@ -86,5 +86,23 @@ class CopiedRun(DomainError):
     """The run's evaluation is already on the board under another racer (HTTP 409)."""
 
 
+class StoreError(DomainError):
+    """The board's storage could not do the work now; nothing was written (HTTP 503, with
+    Retry-After). Trying again in ``retry_after_s`` seconds may succeed."""
+
+    def __init__(self, message: str, retry_after_s: int = 1, *,
+                 detail: list[dict[str, str]] | None = None) -> None:
+        super().__init__(message, detail=detail)
+        self.retry_after_s = retry_after_s
+
+
+class StoreBusy(StoreError):
+    """The storage is busy: throttled, or other writes kept winning the same rows (HTTP 503)."""
+
+
+class StoreUnavailable(StoreError):
+    """The storage (or the archive) did not answer in time or could not be reached (HTTP 503)."""
+
+
 class BoardUnreachable(DomainError):
     """The board could not be reached or answered with something unexpected."""

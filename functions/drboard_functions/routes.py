@@ -69,6 +69,7 @@ from .errors import (
     BoardLocked,
     BoardMismatch,
     BoardNotFound,
+    BoardUnreachable,
     CopiedRun,
     DesignsPrivate,
     DomainError,
@@ -77,6 +78,9 @@ from .errors import (
     NotAuthorized,
     NotSignedIn,
     RacerNotFound,
+    StoreBusy,
+    StoreError,
+    StoreUnavailable,
     SubmissionLimitReached,
     SubmissionTooLarge,
     TooSoon,
@@ -337,14 +341,6 @@ def bounded_json(body: str, bound: RequestBody = RECORD_BODY) -> Any:
         reason = "nested too deeply" if isinstance(error, RecursionError) else str(error).split(":")[0]
         raise bound.invalid(f"{bound.what} cannot be read: {reason}",
                             detail=[{"loc": bound.name, "msg": reason, "type": "value_error"}]) from None
-
-
-def _check_record_size(record: Record) -> None:
-    """A record inside a larger body keeps the record's own bound, as the assembler measures it."""
-    size = len(record.model_dump_json().encode("utf-8"))
-    if size > limits.MAX_RECORD_BYTES:
-        raise SubmissionTooLarge(f"the record is {size} bytes, over the {limits.MAX_RECORD_BYTES} "
-                                 "bytes a record may have")
 
 
 def _json(status: int, body: BaseModel) -> Response[Any]:
@@ -830,7 +826,6 @@ def import_submission(board: BoardId,
                                                                            "an export: its record "
                                                                            "and `submitted_at`.")],
                       service: Service, organiser: Organiser) -> Response[ImportReceipt]:
-    _check_record_size(item.record)
     receipt = service.import_submission(_segment(board), item, caller=organiser)
     return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
 
@@ -910,6 +905,12 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
+    (StoreBusy, HTTPStatus.SERVICE_UNAVAILABLE),
+    (StoreUnavailable, HTTPStatus.SERVICE_UNAVAILABLE),
+    (StoreError, HTTPStatus.SERVICE_UNAVAILABLE),
+    # Raised by clients of a board, not by the board; were one ever to reach a route, it would
+    # be a board behind this one that could not be reached.
+    (BoardUnreachable, HTTPStatus.BAD_GATEWAY),
 )
 
 
@@ -921,8 +922,10 @@ def status_of(error: DomainError) -> HTTPStatus:
 
 
 def error_headers(error: DomainError) -> dict[str, str] | None:
-    """The headers an error answer carries: Retry-After for a cooldown."""
-    return {"Retry-After": str(max(0, error.retry_after_s))} if isinstance(error, TooSoon) else None
+    """The headers an error answer carries: Retry-After for a cooldown and a busy store."""
+    if isinstance(error, TooSoon | StoreError):
+        return {"Retry-After": str(max(0, error.retry_after_s))}
+    return None
 
 
 def error_body(error: DomainError) -> ErrorBody:

@@ -17,6 +17,7 @@ from collections.abc import Callable, Sequence
 from datetime import UTC, datetime, timedelta
 from typing import Any, Literal
 
+from drboard_assembler.limits import MAX_RECORD_BYTES
 from drboard_assembler.aliases import alias_key
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
 from drboard_assembler.errors import field_path
@@ -40,6 +41,7 @@ from .errors import (
     NotSignedIn,
     RacerNotFound,
     SubmissionLimitReached,
+    SubmissionTooLarge,
     TooSoon,
 )
 from .identity import LOCAL_ORGANISER, Caller
@@ -194,11 +196,13 @@ class LeaderboardService:
         if stored is not None:
             return self._duplicate_receipt(stored, record.racer)
         _check_open(board, now)
+        check_record_size(record)
         submission, entry = scored_write(record, board, now)
         limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
                                   max_submissions=board.max_submissions)
         audit = self._event(board.board_id, "push", caller, now, racer=record.racer,
                             submission_id=record.submission_id, detail=record.model_name)
+        self._archive(board.board_id, record)
         try:
             outcome = self.store.record_submission(submission, record, entry, limits,
                                                    fingerprints=evaluation_fingerprints(record),
@@ -211,9 +215,14 @@ class LeaderboardService:
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
             stored = self.store.get_submission(board.board_id, key, record.submission_id)
             return self._duplicate_receipt(stored or submission, record.racer)
-        if self.archive is not None:
-            self.archive.put(board.board_id, record)
         return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
+
+    def _archive(self, board_id: str, record: Record) -> None:
+        """Keep the record in the archive before the push commits: a failed archive write
+        stores nothing (a store error, 503). Its key is the record's content hash, so a push
+        refused or retried afterwards leaves at most an object no row refers to."""
+        if self.archive is not None:
+            self.archive.put(board_id, record)
 
     def _duplicate_receipt(self, stored: Submission, racer: str) -> PushReceipt:
         best = self.store.get_entry(stored.board_id, stored.racer_key)
@@ -709,12 +718,13 @@ class LeaderboardService:
         board = self._require_board(board_id).board
         record = item.record
         _check_belongs(record, board)
+        check_record_size(record)
         submission, entry = scored_write(record, board, item.submitted_at)
         audit = self._event(board_id, "import", caller, self.clock(), racer=record.racer,
                             submission_id=record.submission_id)
+        if self.store.get_submission(board_id, submission.racer_key, record.submission_id) is None:
+            self._archive(board_id, record)
         outcome = self.store.record_submission(submission, record, entry, audit=audit)
-        if not outcome.duplicate and self.archive is not None:
-            self.archive.put(board_id, record)
         return ImportReceipt(status="duplicate" if outcome.duplicate else "created",
                              board_id=board_id, submission_id=record.submission_id)
 
@@ -756,6 +766,16 @@ def is_default_board_id(board_id: str) -> bool:
             if board_id.endswith(suffix) and base and catalog.get(base) is not None:
                 return True
     return False
+
+
+def check_record_size(record: Record) -> None:
+    """Every board, embedded or in the cloud, holds a record to the same bound in bytes (its
+    JSON, as the assembler measures it); the record's model bounds the rest (string lengths,
+    laps, runs, curve points)."""
+    size = len(record.model_dump_json().encode("utf-8"))
+    if size > MAX_RECORD_BYTES:
+        raise SubmissionTooLarge(f"the record is {size} bytes, over the {MAX_RECORD_BYTES} "
+                                 "bytes a record may have")
 
 
 def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission, Entry]:

@@ -44,7 +44,7 @@ from botocore.exceptions import ClientError
 from drboard_assembler.record import Record
 
 from .. import ranking
-from ..errors import BoardNotFound
+from ..errors import BoardNotFound, StoreBusy
 from ..models import (
     AliasClaim,
     AuditEvent,
@@ -55,6 +55,7 @@ from ..models import (
     SubmissionLimits,
     WriteOutcome,
 )
+from .aws_errors import translating
 from .base import (
     AliasConflict,
     AuditSlice,
@@ -87,10 +88,6 @@ BATCH_GET_KEYS = 100
 MAX_ATTEMPTS = 10  # of a push that loses a race with another push of the same racer or board
 BACKOFF_S = 0.01
 MAX_BACKOFF_S = 0.5
-
-
-class StoreContention(RuntimeError):
-    """A push kept losing races with concurrent pushes; nothing was written. Retry later."""
 
 
 def entry_sk(racer_key: str) -> str:
@@ -160,7 +157,12 @@ def record_item(board_id: str, record: Record) -> Item:
             "record": {"B": zlib.compress(record.model_dump_json().encode())}}
 
 
+@translating("the board's table")
 class DynamoDbStore:
+    """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
+    same board, raise StoreBusy; a timeout or a lost connection StoreUnavailable (nothing
+    written either way)."""
+
     def __init__(self, table_name: str, client: DynamoDBClient | None = None) -> None:
         self.table = table_name
         self.client: DynamoDBClient = client if client is not None else boto3.client("dynamodb")
@@ -274,7 +276,8 @@ class DynamoDbStore:
             if improves or current is None:
                 return WriteOutcome(duplicate=False, improved=True, entry=entry)
             return WriteOutcome(duplicate=False, improved=False, entry=current)
-        raise StoreContention(f"gave up pushing to {board_id!r} after {MAX_ATTEMPTS} attempts")
+        raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up after {MAX_ATTEMPTS} "
+                        "attempts, nothing was stored; try again in a moment")
 
     def _count_submission(self, submission: Submission,
                           limits: SubmissionLimits | None) -> Any:
@@ -347,7 +350,8 @@ class DynamoDbStore:
                     raise
                 continue  # the entry improved meanwhile: remove what is there now
             return current
-        raise StoreContention(f"gave up removing an entry from {board_id!r}")
+        raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up removing the entry; "
+                        "try again in a moment")
 
     def restore_entry(self, entry: Entry) -> None:
         try:

@@ -15,6 +15,7 @@ from pathlib import Path
 from drboard_assembler.record import Record
 
 from .. import ranking
+from ..errors import StoreBusy
 from ..models import (
     AliasClaim,
     AuditEvent,
@@ -81,6 +82,7 @@ CREATE TABLE IF NOT EXISTS aliases (
 """
 
 BUSY_TIMEOUT_S = 30.0
+BUSY_RETRY_AFTER_S = 1
 
 
 class SqliteStore:
@@ -118,13 +120,17 @@ class SqliteStore:
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
-        self._db.execute("BEGIN IMMEDIATE")
-        try:
-            yield self._db
-        except BaseException:
-            self._db.execute("ROLLBACK")
-            raise
-        self._db.execute("COMMIT")
+        """One write transaction. Another process holding the board past the busy timeout
+        is StoreBusy (nothing written)."""
+        with _busy_as_store_busy(self.path):
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield self._db
+            except BaseException:
+                if self._db.in_transaction:
+                    self._db.execute("ROLLBACK")
+                raise
+            self._db.execute("COMMIT")
 
     # ---- boards ---------------------------------------------------------------------------
 
@@ -343,6 +349,18 @@ class SqliteStore:
         assert column in ("racer_key", "principal")
         row = db.execute(f"SELECT claim FROM aliases WHERE {column} = ?", (value,)).fetchone()
         return AliasClaim.model_validate_json(row[0]) if row else None
+
+
+@contextmanager
+def _busy_as_store_busy(path: str) -> Iterator[None]:
+    try:
+        yield
+    except sqlite3.OperationalError as error:
+        if error.sqlite_errorcode & 0xFF not in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED):
+            raise
+        raise StoreBusy(f"the board {path} is busy with another writer (waited "
+                        f"{BUSY_TIMEOUT_S:g} s); nothing was stored, try again",
+                        BUSY_RETRY_AFTER_S) from error
 
 
 def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
