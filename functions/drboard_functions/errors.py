@@ -36,6 +36,15 @@ class InvalidQuery(DomainError):
     """A bad cursor, limit or name in a query (HTTP 400)."""
 
 
+class UnreadableBody(DomainError):
+    """The request cannot be read as what it says it is: a Content-Length that is not a length
+    or not the body's, base64 that does not decode, text that is not UTF-8 (HTTP 400)."""
+
+
+class UnsupportedBody(DomainError):
+    """The body is in a form the board does not take, e.g. multipart (HTTP 415): send JSON."""
+
+
 class TooSoon(DomainError):
     """A submission limit applies (HTTP 429); ``retry_after_s`` says when to try again."""
 

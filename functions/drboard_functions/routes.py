@@ -20,7 +20,10 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   keeps each request body documented as its model's schema in the OpenAPI document, with no
   second parser. (Powertools runs request validation before any middleware, so a middleware could
   not check the size first.) A form-encoded body is parsed by Powertools' own form parser and
-  refused as 422, an unknown content type as 415; API Gateway bounds every body at 10 MB anyway.
+  refused as 422, a multipart one or an unknown content type as 415; API Gateway bounds every
+  body at 10 MB anyway. Before any of this, :class:`BoardResolver` refuses a body that cannot be
+  read as its headers say (400 ``UnreadableBody``: not UTF-8, bad base64, a Content-Length that
+  is not a number or not the body's length).
 
 Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerate the committed
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
@@ -28,10 +31,12 @@ OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the c
 
 from __future__ import annotations
 
+import base64
+import binascii
 import hashlib
 import json
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from http import HTTPStatus
 from importlib.metadata import PackageNotFoundError
@@ -84,6 +89,8 @@ from .errors import (
     SubmissionLimitReached,
     SubmissionTooLarge,
     TooSoon,
+    UnreadableBody,
+    UnsupportedBody,
 )
 from .identity import Caller, SignIn, caller_from_event
 from .models import (
@@ -118,6 +125,7 @@ from .service import (
 
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
+    from aws_lambda_powertools.utilities.typing import LambdaContext
 
 TITLE = "drboard"
 DEFAULT_LIMIT = 100
@@ -894,6 +902,8 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (BoardNotFound, HTTPStatus.NOT_FOUND),
     (RacerNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
+    (UnreadableBody, HTTPStatus.BAD_REQUEST),
+    (UnsupportedBody, HTTPStatus.UNSUPPORTED_MEDIA_TYPE),
     (TooSoon, HTTPStatus.TOO_MANY_REQUESTS),
     (BoardClosed, HTTPStatus.FORBIDDEN),
     (DesignsPrivate, HTTPStatus.FORBIDDEN),
@@ -1013,17 +1023,62 @@ def _answer_unprocessable(app: APIGatewayHttpResolver, body: RequestBody, messag
 # ---- the resolver -----------------------------------------------------------------------------
 
 
-def build_app(*routers: Router) -> APIGatewayHttpResolver:
+class BoardResolver(APIGatewayHttpResolver):
+    """Powertools' resolver, after a look at the request's framing: a body that cannot be read
+    as what its headers say is refused before any route or parser sees it (Powertools would
+    raise on some of them: a multipart type without a boundary, base64 that does not decode)."""
+
+    def resolve(self, event: Mapping[str, Any], context: LambdaContext) -> dict[str, Any]:
+        problem = unreadable(event)
+        if problem is not None:
+            return refusal(problem)
+        return super().resolve(event, context)
+
+
+def unreadable(event: Mapping[str, Any]) -> DomainError | None:
+    """What is wrong with the event's body as a body, if anything."""
+    headers = {str(k).lower(): str(v) for k, v in (event.get("headers") or {}).items()}
+    body = event.get("body")
+    if event.get("isBase64Encoded") and body:
+        try:
+            raw = base64.b64decode(str(body), validate=True)
+            raw.decode("utf-8")
+        except (binascii.Error, ValueError):
+            return UnreadableBody("the request body is not base64-encoded UTF-8 text")
+    else:
+        try:
+            raw = str(body or "").encode("utf-8")
+        except UnicodeEncodeError:
+            return UnreadableBody("the request body is not UTF-8 text")
+    length = headers.get("content-length")
+    if body is not None and length is not None and (
+            not length.strip().isdecimal() or int(length) != len(raw)):
+        return UnreadableBody(f"the request's Content-Length ({length[:20]!r}) is not the length "
+                              f"of its body ({len(raw)} bytes)")
+    if body and headers.get("content-type", "").lower().startswith("multipart/"):
+        return UnsupportedBody("send the body as application/json")
+    return None
+
+
+def refusal(error: DomainError) -> dict[str, Any]:
+    """The Lambda proxy answer to an error raised before any route runs."""
+    headers = {"Content-Type": content_types.APPLICATION_JSON} | (error_headers(error) or {})
+    return {"statusCode": int(status_of(error)), "headers": headers,
+            "body": error_body(error).model_dump_json(), "isBase64Encoded": False}
+
+
+
+def build_app(*routers: Router) -> BoardResolver:
     """A resolver with these routers, validation, CORS for the reads, and the error statuses.
 
     Give each resolver its own call: a Router serves the resolver that included it last, which
     is fine because the routes read only the resolver's own request and context."""
-    app: APIGatewayHttpResolver
+    app: BoardResolver
 
     def parse_body(body: str) -> Any:
         return bounded_json(body, _route_body(app))
 
-    app = APIGatewayHttpResolver(
+    app = BoardResolver(
         cors=CORSConfig(allow_origin="*", allow_headers=["Content-Type"], max_age=600),
         enable_validation=True,
         response_validation_error_http_code=HTTPStatus.INTERNAL_SERVER_ERROR,
@@ -1053,18 +1108,28 @@ def build_app(*routers: Router) -> APIGatewayHttpResolver:
 
 
 _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
+#: Every route's answer when the board's storage is busy or unreachable (nothing was written).
+_STORE_BUSY = {
+    "description": "The board's storage is busy (`StoreBusy`: throttled, or too many pushes at "
+                   "once) or did not answer (`StoreUnavailable`); nothing was written. Try again "
+                   "after Retry-After seconds.",
+    "headers": {"Retry-After": {"description": "Seconds to wait.", "schema": {"type": "integer"}}},
+    "content": {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}},
+}
 
 
 def openapi_document() -> str:
     """The OpenAPI document of the three functions' routes, as committed in functions/openapi.json.
 
-    It is Powertools' document for ``build_app(push_router, pull_router, admin_router)`` less one
-    thing that is not true of this API: the default "422 Validation Error" Powertools lists on
-    every validated route. Here a bad query or path parameter answers 400 and a bad body 422,
-    both with an :class:`ErrorBody`, and the routes list those responses themselves."""
+    It is Powertools' document for ``build_app(push_router, pull_router, admin_router)`` plus the
+    503 every route may answer (a busy store), less one thing that is not true of this API: the
+    default "422 Validation Error" Powertools lists on every validated route. Here a bad query
+    or path parameter answers 400 and a bad body 422, both with an :class:`ErrorBody`, and the
+    routes list those responses themselves."""
     document = json.loads(build_app(push_router, pull_router, admin_router).get_openapi_json_schema())
     for operations in document["paths"].values():
         for operation in operations.values():
+            operation["responses"]["503"] = _STORE_BUSY
             default = operation["responses"].get("422", {})
             if default.get("content", {}).get("application/json", {}).get("schema", {}).get(
                     "$ref") == _DEFAULT_422:

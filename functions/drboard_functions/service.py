@@ -17,10 +17,10 @@ from collections.abc import Callable, Sequence
 from datetime import UTC, datetime, timedelta
 from typing import Any, Literal
 
-from drboard_assembler.limits import MAX_RECORD_BYTES
 from drboard_assembler.aliases import alias_key
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
 from drboard_assembler.errors import field_path
+from drboard_assembler.limits import MAX_RECORD_BYTES
 from drboard_assembler.record import Alias, EvaluationRun, RaceType, Record
 from pydantic import TypeAdapter, ValidationError
 
@@ -186,6 +186,7 @@ class LeaderboardService:
         nothing and is answered whatever the board's window and limits (it never counts).
         ``caller`` is who pushes: a racer may push only as the alias their sign-in holds (their
         first push claims it); organisers push as anyone; None (unsigned) is refused."""
+        check_record_size(record)
         now = self.clock()
         self._check_pusher(caller, record.racer, now)
         board = self._board_for(record, board_id, now).board
@@ -196,7 +197,6 @@ class LeaderboardService:
         if stored is not None:
             return self._duplicate_receipt(stored, record.racer)
         _check_open(board, now)
-        check_record_size(record)
         submission, entry = scored_write(record, board, now)
         limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
                                   max_submissions=board.max_submissions)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 from functools import cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..identity import SignIn
 from ..service import LeaderboardService
@@ -46,12 +46,11 @@ def client_config() -> Config:
                   retries={"mode": "standard", "max_attempts": RETRIES})
 
 
-def worst_case_call_s(config: Config) -> float:
-    """The longest one SDK call can take with ``config``: every attempt waiting out both
-    timeouts, and every backoff at its longest."""
-    retries: dict[str, Any] = config.retries or {}
-    attempts = int(retries.get("total_max_attempts", retries.get("max_attempts", 0) + 1))
-    waiting = attempts * (float(config.connect_timeout) + float(config.read_timeout))
+def worst_case_call_s() -> float:
+    """The longest one SDK call can take with :func:`client_config`: every attempt waiting out
+    both timeouts, and every backoff at its longest."""
+    attempts = RETRIES + 1
+    waiting = attempts * (CONNECT_TIMEOUT_S + READ_TIMEOUT_S)
     backoff = sum(2.0 ** (n - 1) + RETRY_AFTER_ALLOWANCE_S for n in range(1, attempts))
     return waiting + backoff
 
