@@ -337,6 +337,8 @@ class RacerView(Model):
     #: The best submission's full record (its design, laps and training); None while the board
     #: keeps designs private.
     record: Record | None
+    #: Where the racer's history goes on (``cursor``); None when ``history`` is the rest of it.
+    next_cursor: str | None = None
 
 
 class PushReceipt(Model):
@@ -370,6 +372,15 @@ class RacerSummary(Model):
 class RacerHistory(Model):
     racer: str
     history: list[HistoryItem]
+    next_cursor: str | None = None
+
+
+class BoardList(Model):
+    """One page of the boards, by id; ``next_cursor`` is where the next page starts (a page may
+    hold fewer than its limit when deleted boards were skipped)."""
+
+    boards: list[BoardView]
+    next_cursor: str | None = None
 
 
 # ---- managing boards -------------------------------------------------------------------------

@@ -99,6 +99,7 @@ from .models import (
     AuditPage,
     Board,
     BoardChanges,
+    BoardList,
     BoardPage,
     BoardSpec,
     BoardView,
@@ -184,12 +185,6 @@ class ErrorBody(BaseModel):
     error: str
     message: str
     detail: list[FieldProblem] = Field(default_factory=list)
-
-
-class BoardList(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    boards: list[BoardView]
 
 
 def _error_response(description: str) -> OpenAPIResponse:
@@ -446,10 +441,18 @@ def put_my_alias(request: Annotated[AliasRequest, Body(description="The alias to
 # ---- pull ---------------------------------------------------------------------------------------
 
 
-@pull_router.get("/boards", summary="List the boards", tags=["boards"],
-                 response_description="Every board, by id.")
-def list_boards(service: Service) -> BoardList:
-    return BoardList(boards=service.boards())
+@pull_router.get(
+    "/boards",
+    summary="List the boards",
+    description="The boards by id, `limit` at a time; pass the answer's `next_cursor` as "
+                "`cursor` for the next page, until it is null. (A page may hold fewer than "
+                "`limit` boards: deleted boards are left out.)",
+    tags=["boards"],
+    responses={200: _json_response("One page of the boards, by id.", BoardList),
+               400: _error_response("A bad limit or cursor.")},
+)
+def list_boards(service: Service, limit: Limit = DEFAULT_LIMIT, cursor: Cursor = None) -> BoardList:
+    return service.boards_page(limit, cursor or None)
 
 
 @pull_router.get(
@@ -492,15 +495,18 @@ def _etag_headers(etag: str) -> dict[str, str]:
 @pull_router.get(
     "/boards/<board>/racers/<racer>",
     summary="A racer's entry and history on a board",
-    description="The racer's best entry, its rank, every submission, and the best run's full record "
-                "(design, laps, training).",
+    description="The racer's best entry, its rank, the best run's full record (design, laps, "
+                "training) and their submissions on the board, oldest first, `limit` at a "
+                "time: pass the answer's `next_cursor` as `cursor` for the next ones.",
     tags=["boards"],
-    responses={200: _json_response("The racer's entry, history and best record.", RacerView),
-               400: _error_response(_BAD_PATH),
+    responses={200: _json_response("The racer's entry, best record and one page of their "
+                                   "history.", RacerView),
+               400: _error_response(_BAD_PATH + " Or a bad limit or cursor."),
                404: _error_response("No such board, or the racer has no entry on it.")},
 )
-def get_racer(board: BoardId, racer: RacerAlias, service: Service) -> RacerView:
-    return service.racer(_segment(board), _segment(racer))
+def get_racer(board: BoardId, racer: RacerAlias, service: Service, limit: Limit = DEFAULT_LIMIT,
+              cursor: Cursor = None) -> RacerView:
+    return service.racer(_segment(board), _segment(racer), limit, cursor or None)
 
 
 @pull_router.get(
@@ -549,17 +555,19 @@ def get_racer_status(racer: RacerAlias, service: Service, board: OnBoard = None)
 @pull_router.get(
     "/racers/<racer>/submissions",
     summary="A racer's submissions",
-    description="Every submission of the racer on every board (or on `board` only), oldest "
-                "first; `is_best` marks the one that counts on its board. `racer` is the alias "
-                "as asked. A racer with no submissions has an empty history.",
+    description="The racer's submissions on every board (or on `board` only), oldest first, "
+                "`limit` at a time: pass the answer's `next_cursor` as `cursor` for the next "
+                "page, until it is null. `is_best` marks the one that counts on its board. "
+                "`racer` is the alias as asked. A racer with no submissions has an empty history.",
     tags=["racers"],
-    responses={200: _json_response("The racer's submissions, oldest first.", RacerHistory),
-               400: _error_response(_BAD_PATH),
+    responses={200: _json_response("One page of the racer's submissions, oldest first.",
+                                   RacerHistory),
+               400: _error_response(_BAD_PATH + " Or a bad limit or cursor."),
                404: _error_response("No such board.")},
 )
-def get_racer_history(racer: RacerAlias, service: Service, board: OnBoard = None) -> RacerHistory:
-    alias = _segment(racer)
-    return RacerHistory(racer=alias, history=service.history(alias, board))
+def get_racer_history(racer: RacerAlias, service: Service, board: OnBoard = None,
+                      limit: Limit = DEFAULT_LIMIT, cursor: Cursor = None) -> RacerHistory:
+    return service.history_page(_segment(racer), board, limit, cursor or None)
 
 
 @pull_router.get(
@@ -628,7 +636,7 @@ def _origin(event: Any) -> str:
     responses={200: _PAGE_RESPONSE, 404: _error_response("No such board or racer.")},
 )
 def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[str]:
-    return _page(web.racer_page(service.racer(_segment(board), _segment(racer))))
+    return _page(web.racer_page(service.racer(_segment(board), _segment(racer), MAX_PAGE)))
 
 
 @pull_router.get(

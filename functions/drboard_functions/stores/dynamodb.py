@@ -60,10 +60,14 @@ from .base import (
     AliasConflict,
     AuditSlice,
     BoardHasEntries,
+    BoardSlice,
     FingerprintTaken,
+    HistorySlice,
     LimitReached,
     StoredBoard,
     SubmissionPage,
+    page_token,
+    read_page_token,
 )
 
 if TYPE_CHECKING:
@@ -213,6 +217,20 @@ class DynamoDbStore:
             "ExpressionAttributeValues": {":kind": _s(BOARD_KIND)},
         })
         return [_board(item) for item in items]
+
+    def boards_page(self, after: str | None, limit: int) -> BoardSlice:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": BOARDS_INDEX,
+            "KeyConditionExpression": "board_kind = :kind",
+            "ExpressionAttributeValues": {":kind": _s(BOARD_KIND)},
+        }
+        if after is not None:
+            [board_id] = read_page_token(after, 1)
+            request["ExclusiveStartKey"] = {"board_kind": _s(BOARD_KIND), "board": _s(board_id),
+                                            "sk": _s(BOARD_SK)}
+        items, more = self._page(request, limit)
+        return BoardSlice([_board(item) for item in items],
+                          page_token([items[-1]["board"]["S"]]) if more else None)
 
     # ---- submissions ----------------------------------------------------------------------
 
@@ -528,6 +546,33 @@ class DynamoDbStore:
         mine = [s for s in submissions if s.racer_key == racer_key]
         return sorted(mine, key=lambda s: (s.submitted_at, s.board_id, s.submission_id))
 
+    def history_page(self, racer_key: str, board_id: str | None, after: str | None,
+                     limit: int) -> HistorySlice:
+        # The racer index holds every submission by time, on every board; one board's are
+        # filtered from it, so the page stays in time order.
+        values: dict[str, AttributeValueTypeDef] = {":racer": _s(racer_key)}
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RACER_INDEX,
+            "KeyConditionExpression": "history_racer = :racer",
+            "ExpressionAttributeValues": values,
+            "ProjectionExpression": "board, sk, submitted_at, #data",
+            "ExpressionAttributeNames": {"#data": "data"},
+        }
+        if board_id is not None:
+            request["FilterExpression"] = "board = :board"
+            values[":board"] = _s(board_id)
+        if after is not None:
+            submitted_at, board, sk = read_page_token(after, 3)
+            request["ExclusiveStartKey"] = {"history_racer": _s(racer_key),
+                                            "submitted_at": _s(submitted_at),
+                                            "board": _s(board), "sk": _s(sk)}
+        items, more = self._page(request, limit)
+        last = items[-1] if items else None
+        token = page_token([last["submitted_at"]["S"], last["board"]["S"], last["sk"]["S"]]) \
+            if more and last else None
+        return HistorySlice([Submission.model_validate_json(item["data"]["S"]) for item in items],
+                            token)
+
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         item = self._get(board_id, record_sk(submission_id))
         return Record.model_validate_json(zlib.decompress(item["record"]["B"])) if item else None
@@ -552,6 +597,22 @@ class DynamoDbStore:
             last = page.get("LastEvaluatedKey")
             if not last or (limit is not None and seen >= limit):
                 return
+            request["ExclusiveStartKey"] = last
+
+    def _page(self, request: QueryInputTypeDef, limit: int) -> tuple[list[Item], bool]:
+        """Up to ``limit`` items the query (and its filter) selects, and whether there are
+        more: pages are read until the limit is reached or the query ends."""
+        request = request.copy()
+        items: list[Item] = []
+        while True:
+            request["Limit"] = limit + 1 - len(items)
+            page = self.client.query(**request)
+            items.extend(page["Items"])
+            last = page.get("LastEvaluatedKey")
+            if len(items) > limit:
+                return items[:limit], True
+            if not last:
+                return items, False
             request["ExclusiveStartKey"] = last
 
     def _query(self, request: QueryInputTypeDef, limit: int | None = None) -> list[Item]:

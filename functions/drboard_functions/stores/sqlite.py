@@ -30,10 +30,14 @@ from .base import (
     AliasConflict,
     AuditSlice,
     BoardHasEntries,
+    BoardSlice,
     FingerprintTaken,
+    HistorySlice,
     LimitReached,
     StoredBoard,
     SubmissionPage,
+    page_token,
+    read_page_token,
 )
 
 SCHEMA = """
@@ -165,6 +169,15 @@ class SqliteStore:
         rows = self._db.execute("SELECT board, participants, version FROM boards ORDER BY board_id")
         return [_board(row) for row in rows]
 
+    def boards_page(self, after: str | None, limit: int) -> BoardSlice:
+        rows = self._db.execute(
+            "SELECT board, participants, version, board_id FROM boards WHERE board_id > ? "
+            "ORDER BY board_id LIMIT ?",
+            (read_page_token(after, 1)[0] if after else "", limit + 1)).fetchall()
+        page = rows[:limit]
+        return BoardSlice([_board(row[:3]) for row in page],
+                          page_token([page[-1][3]]) if len(rows) > limit else None)
+
     # ---- submissions ----------------------------------------------------------------------
 
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
@@ -279,6 +292,21 @@ class SqliteStore:
                 "SELECT submission FROM submissions WHERE racer_key = ? AND board_id = ? "
                 "ORDER BY submitted_at", (racer_key, board_id))
         return [Submission.model_validate_json(row[0]) for row in rows]
+
+    def history_page(self, racer_key: str, board_id: str | None, after: str | None,
+                     limit: int) -> HistorySlice:
+        # Keyset pagination on (submitted_at, board_id, submission_id), in the racer index.
+        position = read_page_token(after, 3) if after else ["", "", ""]
+        on_board = "AND board_id = ? " if board_id is not None else ""
+        rows = self._db.execute(
+            "SELECT submission, submitted_at, board_id, submission_id FROM submissions "
+            f"WHERE racer_key = ? {on_board}AND (submitted_at, board_id, submission_id) > (?, ?, ?) "
+            "ORDER BY submitted_at, board_id, submission_id LIMIT ?",
+            (racer_key, *([board_id] if board_id is not None else []), *position, limit + 1),
+        ).fetchall()
+        page = rows[:limit]
+        return HistorySlice([Submission.model_validate_json(row[0]) for row in page],
+                            page_token(page[-1][1:]) if len(rows) > limit else None)
 
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         row = self._db.execute(
