@@ -69,7 +69,6 @@ from .models import (
     EntryView,
     ExportedBoard,
     ExportedEntry,
-    ExportedSubmission,
     ExportLine,
     ExportPage,
     HistoryItem,
@@ -85,6 +84,7 @@ from .models import (
     RacerTally,
     RacerView,
     SpeedPoint,
+    StoredSubmissionLine,
     Submission,
     SubmissionLimits,
     run_mismatches,
@@ -722,13 +722,15 @@ class LeaderboardService:
             lines.append(ExportedBoard(exported_at=self.clock(), board=stored.board))
         if part == "entries":
             entries = self.store.top(board_id, EXPORT_ENTRIES, after)
-            lines.extend(ExportedEntry(entry=entry) for entry in entries)
+            # Models read from the store, already valid: put in the line as they are.
+            lines.extend(ExportedEntry.model_construct(entry=entry) for entry in entries)
             more = len(entries) == EXPORT_ENTRIES
             next_cursor = _export_cursor("entries", entries[-1].rank_key) if more else (
                 _export_cursor("submissions", None))
             return ExportPage(lines=lines, next_cursor=next_cursor)
-        page = self.store.submissions(board_id, after, EXPORT_SUBMISSIONS)
-        lines.extend(ExportedSubmission(submission=s, record=r) for s, r in page.submissions)
+        page = self.store.stored_submissions(board_id, after, EXPORT_SUBMISSIONS)
+        # Each record goes out as the JSON it was stored as (it was validated when pushed).
+        lines.extend(StoredSubmissionLine.of(s, raw) for s, raw in page.submissions)
         return ExportPage(lines=lines,
                           next_cursor=_export_cursor("submissions", page.after) if page.after else None)
 

@@ -66,6 +66,13 @@ class SubmissionPage(NamedTuple):
     after: str | None  # where the next page starts; None on the last page
 
 
+def stored_record(raw: str | bytes) -> Record:
+    """A record read back from the board's own store: every field is validated, but its content
+    hash, checked when the record was stored, is not recomputed (the record's own build skips
+    it the same way); that hash is most of the cost of reading a record."""
+    return Record.model_validate_json(raw, context={"draft": True})
+
+
 class BadPageToken(ValueError):
     """A page token the store did not give out."""
 
@@ -85,6 +92,11 @@ def read_page_token(token: str, parts: int) -> list[str]:
             and all(isinstance(part, str) for part in position)):
         raise BadPageToken("not a page token")
     return position
+
+
+class StoredSubmissionPage(NamedTuple):
+    submissions: list[tuple[Submission, str | bytes]]  # each with its record's JSON as stored
+    after: str | None  # where the next page starts; None on the last page
 
 
 class BoardSlice(NamedTuple):
@@ -139,6 +151,10 @@ class BoardStore(Protocol):
     def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
         """Up to ``limit`` of the board's submissions with their records, in a stable order,
         starting after the page token ``after``."""
+
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
+        """As ``submissions``, with each record the JSON it was stored as (not parsed): what an
+        export writes out."""
 
     def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
         """Up to ``limit`` entries in rank-key order, starting after the rank key ``after``."""

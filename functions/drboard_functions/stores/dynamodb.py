@@ -65,9 +65,11 @@ from .base import (
     HistorySlice,
     LimitReached,
     StoredBoard,
+    StoredSubmissionPage,
     SubmissionPage,
     page_token,
     read_page_token,
+    stored_record,
 )
 
 if TYPE_CHECKING:
@@ -449,6 +451,10 @@ class DynamoDbStore:
                           last_submitted_at=ranking.parse_timestamp(last["S"]) if last else None)
 
     def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        page = self.stored_submissions(board_id, after, limit)
+        return SubmissionPage([(s, stored_record(raw)) for s, raw in page.submissions], page.after)
+
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
         request: QueryInputTypeDef = {
             "TableName": self.table, "ConsistentRead": True, "Limit": limit,
             "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
@@ -460,12 +466,14 @@ class DynamoDbStore:
         page = self.client.query(**request)
         submissions = [Submission.model_validate_json(item["data"]["S"]) for item in page["Items"]]
         records = self._records(board_id, [s.submission_id for s in submissions])
-        pairs = [(s, records[s.submission_id]) for s in submissions if s.submission_id in records]
+        pairs: list[tuple[Submission, str | bytes]] = [
+            (s, records[s.submission_id]) for s in submissions if s.submission_id in records]
         more = page.get("LastEvaluatedKey") and page["Items"]
-        return SubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
+        return StoredSubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
 
-    def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, Record]:
-        records: dict[str, Record] = {}
+    def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, bytes]:
+        """The records' JSON, as stored, by submission id."""
+        records: dict[str, bytes] = {}
         keys = [{"board": _s(board_id), "sk": _s(record_sk(i))} for i in dict.fromkeys(submission_ids)]
         for start in range(0, len(keys), BATCH_GET_KEYS):
             pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
@@ -476,8 +484,8 @@ class DynamoDbStore:
                     _backoff(attempt)
                 answer = self.client.batch_get_item(RequestItems=pending)
                 for item in answer["Responses"].get(self.table, []):
-                    record = Record.model_validate_json(zlib.decompress(item["record"]["B"]))
-                    records[record.submission_id] = record
+                    submission_id = item["sk"]["S"].removeprefix(record_sk(""))
+                    records[submission_id] = zlib.decompress(item["record"]["B"])
                 pending = answer.get("UnprocessedKeys") or None
                 attempt += 1
         return records

@@ -35,9 +35,11 @@ from .base import (
     HistorySlice,
     LimitReached,
     StoredBoard,
+    StoredSubmissionPage,
     SubmissionPage,
     page_token,
     read_page_token,
+    stored_record,
 )
 
 SCHEMA = """
@@ -244,13 +246,16 @@ class SqliteStore:
                           last_submitted_at=ranking.parse_timestamp(last) if last else None)
 
     def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        page = self.stored_submissions(board_id, after, limit)
+        return SubmissionPage([(s, stored_record(raw)) for s, raw in page.submissions], page.after)
+
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
         rows = self._db.execute(
             "SELECT submission_id, submission, record FROM submissions "
             "WHERE board_id = ? AND submission_id > ? ORDER BY submission_id LIMIT ?",
             (board_id, after or "", limit)).fetchall()
-        page = [(Submission.model_validate_json(row[1]), Record.model_validate_json(row[2]))
-                for row in rows]
-        return SubmissionPage(page, rows[-1][0] if len(rows) == limit else None)
+        page = [(Submission.model_validate_json(row[1]), row[2]) for row in rows]
+        return StoredSubmissionPage(page, rows[-1][0] if len(rows) == limit else None)
 
     def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
         stored = self.get_board(board_id)
