@@ -11,7 +11,8 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   ``resolve`` (``app.append_context(service=...)``); the routes reach it through ``Depends``.
 - The typed domain errors become HTTP statuses in one place, :data:`ERROR_STATUS`; every error
   body is ``{"error": <name>, "message": ..., "detail": [{"loc", "msg", "type"}]}`` (the message
-  says what went wrong; the detail, when there is one, says where).
+  says what went wrong; the detail, when there is one, says where). A store error (``StoreBusy``,
+  ``StoreUnavailable``) answers 503 with ``Retry-After``, on every route: nothing was written.
 - Every JSON body is bounded before it is parsed: the resolver's JSON body deserializer refuses a
   body over its route's bound (413) before ``json.loads`` sees it — a record's
   ``limits.MAX_RECORD_BYTES``; an imported submission's, a record plus a little for its timestamp
@@ -200,6 +201,9 @@ _PAGE_RESPONSE: OpenAPIResponse = {
     "content": {"text/html": {"schema": {"type": "string"}}},
 }
 _BAD_PATH = "A bad board id or racer alias (too long)."
+_UNREADABLE = (" Or a body that cannot be read as its headers say (`UnreadableBody`): a "
+               "Content-Length that is not its length, base64 that does not decode, text that "
+               "is not UTF-8.")
 _UNSIGNED = ("Not signed with SigV4 by an identity allowed to invoke the route (API Gateway's own "
              "answer, without an `error` name); on `drboard serve`, a request from another "
              "computer than the one serving (`NotAuthorized`).")
@@ -367,7 +371,7 @@ def _json(status: int, body: BaseModel) -> Response[Any]:
     responses={
         201: _json_response("The submission was stored.", PushReceipt),
         200: _json_response("The same run was already submitted; nothing changed.", PushReceipt),
-        400: _error_response(_BAD_PATH),
+        400: _error_response(_BAD_PATH + _UNREADABLE),
         401: _error_response("No sign-in the board accepts (`NotSignedIn`)."),
         403: _error_response("The board is not open (`BoardClosed`: it opens later or has "
                              "closed), the racer has made every submission it allows "
@@ -378,7 +382,7 @@ def _json(status: int, body: BaseModel) -> Response[Any]:
                              "racer (`CopiedRun`)."),
         404: _error_response("No such board, and the run's own board is another one."),
         413: _error_response(f"The body is over {limits.MAX_RECORD_BYTES} bytes."),
-        415: _error_response("The body is not JSON."),
+        415: _error_response("The body is not JSON (`UnsupportedBody` for a multipart one)."),
         422: _error_response("The record is invalid or does not belong on this board."),
         429: {**_error_response("The board's cooldown applies (`TooSoon`); see Retry-After."),
               "headers": {"Retry-After": {"description": "Seconds to wait.",
@@ -679,6 +683,7 @@ def _admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
                                              403: _error_response(_UNSIGNED)}
     if body is not None:
         verb = "are" if body.name.endswith("s") else "is"
+        responses[400] = _error_response(_BAD_PATH + _UNREADABLE)
         responses[413] = _error_response(f"The body is over {body.max_bytes} bytes.")
         responses[415] = _error_response("The body is not JSON.")
         responses[422] = _error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
