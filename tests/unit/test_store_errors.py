@@ -23,7 +23,7 @@ from drboard_assembler.record import Record
 from drboard_cli.serve import LocalContext, _refused
 from drboard_functions import errors
 from drboard_functions.handlers import push, wiring
-from drboard_functions.models import BoardView
+from drboard_functions.models import BoardList
 from drboard_functions.routes import ERROR_STATUS, build_app, pull_router
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores import dynamodb, sqlite
@@ -68,7 +68,7 @@ class Failing(LeaderboardService):
         super().__init__(SqliteStore(":memory:"))
         self.error = error
 
-    def boards(self) -> list[BoardView]:
+    def boards_page(self, limit: int = 100, cursor: str | None = None) -> BoardList:
         raise self.error
 
 
