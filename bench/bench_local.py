@@ -392,6 +392,42 @@ def bench_assemble(report: Report, workdir: Path, megabytes: float, runs: int,
                                  "runs": results}
 
 
+# ---- 5: export of a whole board -----------------------------------------------------------------
+
+
+EXPORT_VS_DUMP_MAX_X = 10.0
+
+
+def bench_export(report: Report, path: Path, workdir: Path, label: str) -> None:
+    """`drboard export` of the board in-process (the embedded target, written to a file) against
+    a plain dump of the same SQLite file (every row of every table, as SQL text)."""
+    from drboard_cli import transfer
+
+    store = SqliteStore(path)
+    service = LeaderboardService(store)
+    exported = workdir / "export.jsonl"
+    start = time.perf_counter()
+    with exported.open("w", encoding="utf-8") as out:
+        counts = transfer.write_export(service, BOARD_ID, out)
+    export_s = time.perf_counter() - start
+    store.close()
+
+    dumped = workdir / "dump.sql"
+    start = time.perf_counter()
+    with sqlite3.connect(path) as db, dumped.open("w", encoding="utf-8") as out:
+        for statement in db.iterdump():
+            out.write(statement + "\n")
+    dump_s = time.perf_counter() - start
+    report.add(f"export {label} (write_export to a file)", export_s, "s",
+               note=f"{counts.entries:,} entries, {counts.submissions:,} submissions, "
+                    f"{exported.stat().st_size / 2**20:,.1f} MiB")
+    report.add(f"plain dump {label} (sqlite3 iterdump to a file)", dump_s, "s",
+               note=f"{dumped.stat().st_size / 2**20:,.1f} MiB")
+    report.add(f"export / plain dump {label}", export_s / dump_s, "x", limit=EXPORT_VS_DUMP_MAX_X)
+    exported.unlink()
+    dumped.unlink()
+
+
 # ---- main ---------------------------------------------------------------------------------------
 
 
@@ -418,7 +454,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="build the boards and run folder here and keep them "
                              "(default: a temporary folder, removed afterwards)")
     parser.add_argument("--seed", type=int, default=2019, help="random seed (default 2019)")
-    parser.add_argument("--skip", choices=["push", "pull", "cli", "assemble"], action="append",
+    parser.add_argument("--skip", choices=["push", "pull", "cli", "assemble", "export"],
+                        action="append",
                         default=[], help="skip a part (repeatable)")
     args = parser.parse_args(argv)
     quick = args.quick
@@ -449,7 +486,7 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
     command = drboard_command(args.drboard)
     pull_p50: dict[int, float] = {}
 
-    if {"push", "pull", "cli"} - set(args.skip):
+    if {"push", "pull", "cli", "export"} - set(args.skip):
         for size in (small, large):
             label = label_of(size)
             path = workdir / f"board-{size}.db"
@@ -466,6 +503,8 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
                 pull_p50[size] = bench_pull(report, path, size, label, args.pull_reps)
             if "cli" not in args.skip and size == large:
                 bench_cli(report, path, label, args.cli_runs, command)
+            if "export" not in args.skip and size == large:
+                bench_export(report, path, workdir, label)
             if "push" not in args.skip:  # last: it adds racers to the board
                 bench_push(report, path, label, pushes, warmup=5)
         if small in pull_p50 and large in pull_p50:

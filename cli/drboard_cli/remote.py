@@ -17,17 +17,19 @@ import re
 import urllib.error
 import urllib.parse
 import urllib.request
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
 from drboard_functions.models import (
+    MAX_PAGE,
     AliasRequest,
     AuditPage,
     Board,
     BoardChanges,
+    BoardList,
     BoardPage,
     BoardSpec,
     BoardView,
@@ -45,13 +47,14 @@ from drboard_functions.models import (
     RacerView,
 )
 from drboard_functions.service import default_board_id
-from pydantic import BaseModel, TypeAdapter, ValidationError
+from pydantic import BaseModel, ValidationError
 
 from . import tokens
 from .joins import Joined, JoinRequest
 from .login import fresh_token
 
 T = TypeVar("T", bound=BaseModel)
+P = TypeVar("P", BoardList, RacerHistory, RacerView)
 
 TIMEOUT_S = 20
 DEFAULT_RETRY_AFTER_S = 60
@@ -77,20 +80,19 @@ class HttpBoard:
         return _parse(PushReceipt, answer)
 
     def boards(self) -> list[BoardView]:
-        answer = self._call("GET", "/boards")
-        items = answer.body.get("boards", answer.body) if isinstance(answer.body, dict) else answer.body
-        try:
-            return TypeAdapter(list[BoardView]).validate_python(items)
-        except ValidationError as error:
-            raise errors.BoardUnreachable(f"unexpected answer from {self.endpoint}: {error}") from None
+        """Every board, following the pages."""
+        return [board for page in self._pages(BoardList, "/boards", {}) for board in page.boards]
 
     def board_page(self, board_id: str, limit: int, cursor: str | None) -> BoardPage:
         query = {"limit": str(limit), "cursor": cursor}
         return _parse(BoardPage, self._call("GET", f"/boards/{_quote(board_id)}", query=query))
 
     def racer(self, board_id: str, racer: str) -> RacerView:
-        answer = self._call("GET", f"/boards/{_quote(board_id)}/racers/{_quote(racer)}")
-        return _parse(RacerView, answer)
+        """The racer's entry and record, with their whole history on the board."""
+        path = f"/boards/{_quote(board_id)}/racers/{_quote(racer)}"
+        pages = list(self._pages(RacerView, path, {}))
+        history = [item for page in pages for item in page.history]
+        return pages[0].model_copy(update={"history": history, "next_cursor": None})
 
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/compare", query={"racer": list(racers)})
@@ -101,8 +103,9 @@ class HttpBoard:
         return _parse(Insights, answer)
 
     def history(self, racer: str, board_id: str | None) -> list[HistoryItem]:
-        answer = self._call("GET", f"/racers/{_quote(racer)}/submissions", query={"board": board_id})
-        return _parse(RacerHistory, answer).history
+        """Every submission of the racer, following the pages."""
+        pages = self._pages(RacerHistory, f"/racers/{_quote(racer)}/submissions", {"board": board_id})
+        return [item for page in pages for item in page.history]
 
     def status(self, racer: str, board_id: str | None) -> RacerSummary:
         answer = self._call("GET", f"/racers/{_quote(racer)}", query={"board": board_id})
@@ -174,6 +177,20 @@ class HttpBoard:
         return _parse(AuditPage, answer)
 
     # ---- HTTP ---------------------------------------------------------------------------
+
+    def _pages(self, model: type[P], path: str, query: dict[str, str | None]) -> Iterator[P]:
+        """Each page of a paginated read, at the largest page size, until ``next_cursor`` is
+        null (or repeats: a board that answers the same cursor again is not followed round)."""
+        cursor: str | None = None
+        seen: set[str] = set()
+        while True:
+            page = _parse(model, self._call("GET", path, query=query | {
+                "limit": str(MAX_PAGE), "cursor": cursor}))
+            yield page
+            cursor = page.next_cursor
+            if cursor is None or cursor in seen:
+                return
+            seen.add(cursor)
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: Mapping[str, str | list[str] | None] | None = None,
@@ -271,9 +288,14 @@ def _domain_error(error: urllib.error.HTTPError, url: str) -> errors.DomainError
     if detail:
         message = f"{message}: {detail[0]['loc']}: {detail[0]['msg']}"
     named = _NAMED_ERRORS.get(str(answer.get("error", "")))
+    retry_text = (error.headers.get("Retry-After") or "").strip()
+    retry = int(retry_text) if retry_text.isdigit() else None
     if named is errors.TooSoon or (named is None and error.code == 429):
-        retry = (error.headers.get("Retry-After") or "").strip()
-        return errors.TooSoon(message, int(retry) if retry.isdigit() else DEFAULT_RETRY_AFTER_S)
+        return errors.TooSoon(message, retry if retry is not None else DEFAULT_RETRY_AFTER_S)
+    if named is not None and issubclass(named, errors.StoreError):
+        return named(message, retry if retry is not None else 1)
+    if named is None and error.code == 503:
+        return errors.StoreUnavailable(message, retry if retry is not None else 1)
     if named is not None:
         return named(message, detail=detail)
     if error.code in (401, 403):

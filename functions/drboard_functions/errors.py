@@ -36,6 +36,15 @@ class InvalidQuery(DomainError):
     """A bad cursor, limit or name in a query (HTTP 400)."""
 
 
+class UnreadableBody(DomainError):
+    """The request cannot be read as what it says it is: a Content-Length that is not a length
+    or not the body's, base64 that does not decode, text that is not UTF-8 (HTTP 400)."""
+
+
+class UnsupportedBody(DomainError):
+    """The body is in a form the board does not take, e.g. multipart (HTTP 415): send JSON."""
+
+
 class TooSoon(DomainError):
     """A submission limit applies (HTTP 429); ``retry_after_s`` says when to try again."""
 
@@ -84,6 +93,24 @@ class Banned(NotAuthorized):
 
 class CopiedRun(DomainError):
     """The run's evaluation is already on the board under another racer (HTTP 409)."""
+
+
+class StoreError(DomainError):
+    """The board's storage could not do the work now; nothing was written (HTTP 503, with
+    Retry-After). Trying again in ``retry_after_s`` seconds may succeed."""
+
+    def __init__(self, message: str, retry_after_s: int = 1, *,
+                 detail: list[dict[str, str]] | None = None) -> None:
+        super().__init__(message, detail=detail)
+        self.retry_after_s = retry_after_s
+
+
+class StoreBusy(StoreError):
+    """The storage is busy: throttled, or other writes kept winning the same rows (HTTP 503)."""
+
+
+class StoreUnavailable(StoreError):
+    """The storage (or the archive) did not answer in time or could not be reached (HTTP 503)."""
 
 
 class BoardUnreachable(DomainError):

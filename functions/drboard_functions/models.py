@@ -9,7 +9,18 @@ from enum import StrEnum
 from typing import Annotated, Any, Literal, Self
 
 from drboard_assembler.record import RaceType, Record
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    SerializerFunctionWrapHandler,
+    StringConstraints,
+    model_serializer,
+    model_validator,
+)
+from pydantic_core import from_json
 
 MAX_PAGE = 500
 MAX_COOLDOWN_S = 7 * 24 * 3600
@@ -333,6 +344,8 @@ class RacerView(Model):
     #: The best submission's full record (its design, laps and training); None while the board
     #: keeps designs private.
     record: Record | None
+    #: Where the racer's history goes on (``cursor``); None when ``history`` is the rest of it.
+    next_cursor: str | None = None
 
 
 class PushReceipt(Model):
@@ -366,6 +379,15 @@ class RacerSummary(Model):
 class RacerHistory(Model):
     racer: str
     history: list[HistoryItem]
+    next_cursor: str | None = None
+
+
+class BoardList(Model):
+    """One page of the boards, by id; ``next_cursor`` is where the next page starts (a page may
+    hold fewer than its limit when deleted boards were skipped)."""
+
+    boards: list[BoardView]
+    next_cursor: str | None = None
 
 
 # ---- managing boards -------------------------------------------------------------------------
@@ -426,6 +448,35 @@ class ExportedSubmission(Model):
     kind: Literal["submission"] = "submission"
     submission: Submission
     record: Record
+
+
+class StoredSubmissionLine(ExportedSubmission):
+    """A submission line as an export reads it from the board's own store: the record stays the
+    JSON it was stored as (validated when it was pushed) and is written out as it is. It is
+    parsed only when ``record`` is read, so exporting a big board validates no record."""
+
+    _record_json: str | bytes = PrivateAttr(default="")
+
+    @classmethod
+    def of(cls, submission: Submission, record_json: str | bytes) -> "StoredSubmissionLine":
+        fields: dict[str, Any] = {"submission": submission}  # no record: see __getattr__
+        line = cls.model_construct(**fields)
+        line._record_json = record_json
+        return line
+
+    def __getattr__(self, name: str) -> Any:
+        if name == "record" and "record" not in self.__dict__:
+            record = Record.model_validate_json(self._record_json, context={"draft": True})
+            self.__dict__["record"] = record
+            return record
+        return super().__getattr__(name)  # type: ignore[misc]
+
+    @model_serializer(mode="wrap")
+    def _as_stored(self, handler: SerializerFunctionWrapHandler) -> Any:
+        if "record" in self.__dict__:
+            return handler(self)
+        return {"kind": self.kind, "submission": self.submission.model_dump(mode="json"),
+                "record": from_json(self._record_json)}
 
 
 ExportLine = Annotated[ExportedBoard | ExportedEntry | ExportedSubmission, Field(discriminator="kind")]

@@ -11,7 +11,8 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   ``resolve`` (``app.append_context(service=...)``); the routes reach it through ``Depends``.
 - The typed domain errors become HTTP statuses in one place, :data:`ERROR_STATUS`; every error
   body is ``{"error": <name>, "message": ..., "detail": [{"loc", "msg", "type"}]}`` (the message
-  says what went wrong; the detail, when there is one, says where).
+  says what went wrong; the detail, when there is one, says where). A store error (``StoreBusy``,
+  ``StoreUnavailable``) answers 503 with ``Retry-After``, on every route: nothing was written.
 - Every JSON body is bounded before it is parsed: the resolver's JSON body deserializer refuses a
   body over its route's bound (413) before ``json.loads`` sees it — a record's
   ``limits.MAX_RECORD_BYTES``; an imported submission's, a record plus a little for its timestamp
@@ -20,7 +21,10 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   keeps each request body documented as its model's schema in the OpenAPI document, with no
   second parser. (Powertools runs request validation before any middleware, so a middleware could
   not check the size first.) A form-encoded body is parsed by Powertools' own form parser and
-  refused as 422, an unknown content type as 415; API Gateway bounds every body at 10 MB anyway.
+  refused as 422, a multipart one or an unknown content type as 415; API Gateway bounds every
+  body at 10 MB anyway. Before any of this, :class:`BoardResolver` refuses a body that cannot be
+  read as its headers say (400 ``UnreadableBody``: not UTF-8, bad base64, a Content-Length that
+  is not a number or not the body's length).
 
 Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerate the committed
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
@@ -28,10 +32,12 @@ OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the c
 
 from __future__ import annotations
 
+import base64
+import binascii
 import hashlib
 import json
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from http import HTTPStatus
 from importlib.metadata import PackageNotFoundError
@@ -69,6 +75,7 @@ from .errors import (
     BoardLocked,
     BoardMismatch,
     BoardNotFound,
+    BoardUnreachable,
     CopiedRun,
     DesignsPrivate,
     DomainError,
@@ -77,9 +84,14 @@ from .errors import (
     NotAuthorized,
     NotSignedIn,
     RacerNotFound,
+    StoreBusy,
+    StoreError,
+    StoreUnavailable,
     SubmissionLimitReached,
     SubmissionTooLarge,
     TooSoon,
+    UnreadableBody,
+    UnsupportedBody,
 )
 from .identity import Caller, SignIn, caller_from_event
 from .models import (
@@ -88,6 +100,7 @@ from .models import (
     AuditPage,
     Board,
     BoardChanges,
+    BoardList,
     BoardPage,
     BoardSpec,
     BoardView,
@@ -114,6 +127,7 @@ from .service import (
 
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
+    from aws_lambda_powertools.utilities.typing import LambdaContext
 
 TITLE = "drboard"
 DEFAULT_LIMIT = 100
@@ -174,12 +188,6 @@ class ErrorBody(BaseModel):
     detail: list[FieldProblem] = Field(default_factory=list)
 
 
-class BoardList(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    boards: list[BoardView]
-
-
 def _error_response(description: str) -> OpenAPIResponse:
     return {"description": description, "content": {"application/json": {"model": ErrorBody}}}
 
@@ -193,6 +201,9 @@ _PAGE_RESPONSE: OpenAPIResponse = {
     "content": {"text/html": {"schema": {"type": "string"}}},
 }
 _BAD_PATH = "A bad board id or racer alias (too long)."
+_UNREADABLE = (" Or a body that cannot be read as its headers say (`UnreadableBody`): a "
+               "Content-Length that is not its length, base64 that does not decode, text that "
+               "is not UTF-8.")
 _UNSIGNED = ("Not signed with SigV4 by an identity allowed to invoke the route (API Gateway's own "
              "answer, without an `error` name); on `drboard serve`, a request from another "
              "computer than the one serving (`NotAuthorized`).")
@@ -339,14 +350,6 @@ def bounded_json(body: str, bound: RequestBody = RECORD_BODY) -> Any:
                             detail=[{"loc": bound.name, "msg": reason, "type": "value_error"}]) from None
 
 
-def _check_record_size(record: Record) -> None:
-    """A record inside a larger body keeps the record's own bound, as the assembler measures it."""
-    size = len(record.model_dump_json().encode("utf-8"))
-    if size > limits.MAX_RECORD_BYTES:
-        raise SubmissionTooLarge(f"the record is {size} bytes, over the {limits.MAX_RECORD_BYTES} "
-                                 "bytes a record may have")
-
-
 def _json(status: int, body: BaseModel) -> Response[Any]:
     return Response(status_code=status, content_type=content_types.APPLICATION_JSON, body=body)
 
@@ -368,7 +371,7 @@ def _json(status: int, body: BaseModel) -> Response[Any]:
     responses={
         201: _json_response("The submission was stored.", PushReceipt),
         200: _json_response("The same run was already submitted; nothing changed.", PushReceipt),
-        400: _error_response(_BAD_PATH),
+        400: _error_response(_BAD_PATH + _UNREADABLE),
         401: _error_response("No sign-in the board accepts (`NotSignedIn`)."),
         403: _error_response("The board is not open (`BoardClosed`: it opens later or has "
                              "closed), the racer has made every submission it allows "
@@ -379,7 +382,7 @@ def _json(status: int, body: BaseModel) -> Response[Any]:
                              "racer (`CopiedRun`)."),
         404: _error_response("No such board, and the run's own board is another one."),
         413: _error_response(f"The body is over {limits.MAX_RECORD_BYTES} bytes."),
-        415: _error_response("The body is not JSON."),
+        415: _error_response("The body is not JSON (`UnsupportedBody` for a multipart one)."),
         422: _error_response("The record is invalid or does not belong on this board."),
         429: {**_error_response("The board's cooldown applies (`TooSoon`); see Retry-After."),
               "headers": {"Retry-After": {"description": "Seconds to wait.",
@@ -442,10 +445,18 @@ def put_my_alias(request: Annotated[AliasRequest, Body(description="The alias to
 # ---- pull ---------------------------------------------------------------------------------------
 
 
-@pull_router.get("/boards", summary="List the boards", tags=["boards"],
-                 response_description="Every board, by id.")
-def list_boards(service: Service) -> BoardList:
-    return BoardList(boards=service.boards())
+@pull_router.get(
+    "/boards",
+    summary="List the boards",
+    description="The boards by id, `limit` at a time; pass the answer's `next_cursor` as "
+                "`cursor` for the next page, until it is null. (A page may hold fewer than "
+                "`limit` boards: deleted boards are left out.)",
+    tags=["boards"],
+    responses={200: _json_response("One page of the boards, by id.", BoardList),
+               400: _error_response("A bad limit or cursor.")},
+)
+def list_boards(service: Service, limit: Limit = DEFAULT_LIMIT, cursor: Cursor = None) -> BoardList:
+    return service.boards_page(limit, cursor or None)
 
 
 @pull_router.get(
@@ -488,15 +499,18 @@ def _etag_headers(etag: str) -> dict[str, str]:
 @pull_router.get(
     "/boards/<board>/racers/<racer>",
     summary="A racer's entry and history on a board",
-    description="The racer's best entry, its rank, every submission, and the best run's full record "
-                "(design, laps, training).",
+    description="The racer's best entry, its rank, the best run's full record (design, laps, "
+                "training) and their submissions on the board, oldest first, `limit` at a "
+                "time: pass the answer's `next_cursor` as `cursor` for the next ones.",
     tags=["boards"],
-    responses={200: _json_response("The racer's entry, history and best record.", RacerView),
-               400: _error_response(_BAD_PATH),
+    responses={200: _json_response("The racer's entry, best record and one page of their "
+                                   "history.", RacerView),
+               400: _error_response(_BAD_PATH + " Or a bad limit or cursor."),
                404: _error_response("No such board, or the racer has no entry on it.")},
 )
-def get_racer(board: BoardId, racer: RacerAlias, service: Service) -> RacerView:
-    return service.racer(_segment(board), _segment(racer))
+def get_racer(board: BoardId, racer: RacerAlias, service: Service, limit: Limit = DEFAULT_LIMIT,
+              cursor: Cursor = None) -> RacerView:
+    return service.racer(_segment(board), _segment(racer), limit, cursor or None)
 
 
 @pull_router.get(
@@ -545,17 +559,19 @@ def get_racer_status(racer: RacerAlias, service: Service, board: OnBoard = None)
 @pull_router.get(
     "/racers/<racer>/submissions",
     summary="A racer's submissions",
-    description="Every submission of the racer on every board (or on `board` only), oldest "
-                "first; `is_best` marks the one that counts on its board. `racer` is the alias "
-                "as asked. A racer with no submissions has an empty history.",
+    description="The racer's submissions on every board (or on `board` only), oldest first, "
+                "`limit` at a time: pass the answer's `next_cursor` as `cursor` for the next "
+                "page, until it is null. `is_best` marks the one that counts on its board. "
+                "`racer` is the alias as asked. A racer with no submissions has an empty history.",
     tags=["racers"],
-    responses={200: _json_response("The racer's submissions, oldest first.", RacerHistory),
-               400: _error_response(_BAD_PATH),
+    responses={200: _json_response("One page of the racer's submissions, oldest first.",
+                                   RacerHistory),
+               400: _error_response(_BAD_PATH + " Or a bad limit or cursor."),
                404: _error_response("No such board.")},
 )
-def get_racer_history(racer: RacerAlias, service: Service, board: OnBoard = None) -> RacerHistory:
-    alias = _segment(racer)
-    return RacerHistory(racer=alias, history=service.history(alias, board))
+def get_racer_history(racer: RacerAlias, service: Service, board: OnBoard = None,
+                      limit: Limit = DEFAULT_LIMIT, cursor: Cursor = None) -> RacerHistory:
+    return service.history_page(_segment(racer), board, limit, cursor or None)
 
 
 @pull_router.get(
@@ -624,7 +640,7 @@ def _origin(event: Any) -> str:
     responses={200: _PAGE_RESPONSE, 404: _error_response("No such board or racer.")},
 )
 def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[str]:
-    return _page(web.racer_page(service.racer(_segment(board), _segment(racer))))
+    return _page(web.racer_page(service.racer(_segment(board), _segment(racer), MAX_PAGE)))
 
 
 @pull_router.get(
@@ -667,6 +683,7 @@ def _admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
                                              403: _error_response(_UNSIGNED)}
     if body is not None:
         verb = "are" if body.name.endswith("s") else "is"
+        responses[400] = _error_response(_BAD_PATH + _UNREADABLE)
         responses[413] = _error_response(f"The body is over {body.max_bytes} bytes.")
         responses[415] = _error_response("The body is not JSON.")
         responses[422] = _error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
@@ -771,8 +788,13 @@ def restore_board(board: BoardId, service: Service, organiser: Organiser) -> Boa
                                errors={400: "A bad cursor or board id.", 404: "No such board."}),
     **_ADMIN,
 )
-def export_board(board: BoardId, service: Service, organiser: Organiser, cursor: Cursor = None) -> ExportPage:
-    return service.export_page(_segment(board), cursor or None)
+def export_board(board: BoardId, service: Service, organiser: Organiser,
+                 cursor: Cursor = None) -> Response[Any]:
+    page = service.export_page(_segment(board), cursor or None)
+    # Each line as it serialises itself: a stored record goes out as it was stored, unparsed.
+    lines = ",".join(line.model_dump_json() for line in page.lines)
+    body = f'{{"lines":[{lines}],"next_cursor":{json.dumps(page.next_cursor)}}}'
+    return Response(status_code=HTTPStatus.OK, content_type=content_types.APPLICATION_JSON, body=body)
 
 
 @admin_router.put(
@@ -830,7 +852,6 @@ def import_submission(board: BoardId,
                                                                            "an export: its record "
                                                                            "and `submitted_at`.")],
                       service: Service, organiser: Organiser) -> Response[ImportReceipt]:
-    _check_record_size(item.record)
     receipt = service.import_submission(_segment(board), item, caller=organiser)
     return _json(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
 
@@ -899,6 +920,8 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (BoardNotFound, HTTPStatus.NOT_FOUND),
     (RacerNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
+    (UnreadableBody, HTTPStatus.BAD_REQUEST),
+    (UnsupportedBody, HTTPStatus.UNSUPPORTED_MEDIA_TYPE),
     (TooSoon, HTTPStatus.TOO_MANY_REQUESTS),
     (BoardClosed, HTTPStatus.FORBIDDEN),
     (DesignsPrivate, HTTPStatus.FORBIDDEN),
@@ -910,6 +933,12 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
+    (StoreBusy, HTTPStatus.SERVICE_UNAVAILABLE),
+    (StoreUnavailable, HTTPStatus.SERVICE_UNAVAILABLE),
+    (StoreError, HTTPStatus.SERVICE_UNAVAILABLE),
+    # Raised by clients of a board, not by the board; were one ever to reach a route, it would
+    # be a board behind this one that could not be reached.
+    (BoardUnreachable, HTTPStatus.BAD_GATEWAY),
 )
 
 
@@ -921,8 +950,10 @@ def status_of(error: DomainError) -> HTTPStatus:
 
 
 def error_headers(error: DomainError) -> dict[str, str] | None:
-    """The headers an error answer carries: Retry-After for a cooldown."""
-    return {"Retry-After": str(max(0, error.retry_after_s))} if isinstance(error, TooSoon) else None
+    """The headers an error answer carries: Retry-After for a cooldown and a busy store."""
+    if isinstance(error, TooSoon | StoreError):
+        return {"Retry-After": str(max(0, error.retry_after_s))}
+    return None
 
 
 def error_body(error: DomainError) -> ErrorBody:
@@ -1010,17 +1041,62 @@ def _answer_unprocessable(app: APIGatewayHttpResolver, body: RequestBody, messag
 # ---- the resolver -----------------------------------------------------------------------------
 
 
-def build_app(*routers: Router) -> APIGatewayHttpResolver:
+class BoardResolver(APIGatewayHttpResolver):
+    """Powertools' resolver, after a look at the request's framing: a body that cannot be read
+    as what its headers say is refused before any route or parser sees it (Powertools would
+    raise on some of them: a multipart type without a boundary, base64 that does not decode)."""
+
+    def resolve(self, event: Mapping[str, Any], context: LambdaContext) -> dict[str, Any]:
+        problem = unreadable(event)
+        if problem is not None:
+            return refusal(problem)
+        return super().resolve(event, context)
+
+
+def unreadable(event: Mapping[str, Any]) -> DomainError | None:
+    """What is wrong with the event's body as a body, if anything."""
+    headers = {str(k).lower(): str(v) for k, v in (event.get("headers") or {}).items()}
+    body = event.get("body")
+    if event.get("isBase64Encoded") and body:
+        try:
+            raw = base64.b64decode(str(body), validate=True)
+            raw.decode("utf-8")
+        except (binascii.Error, ValueError):
+            return UnreadableBody("the request body is not base64-encoded UTF-8 text")
+    else:
+        try:
+            raw = str(body or "").encode("utf-8")
+        except UnicodeEncodeError:
+            return UnreadableBody("the request body is not UTF-8 text")
+    length = headers.get("content-length")
+    if body is not None and length is not None and (
+            not length.strip().isdecimal() or int(length) != len(raw)):
+        return UnreadableBody(f"the request's Content-Length ({length[:20]!r}) is not the length "
+                              f"of its body ({len(raw)} bytes)")
+    if body and headers.get("content-type", "").lower().startswith("multipart/"):
+        return UnsupportedBody("send the body as application/json")
+    return None
+
+
+def refusal(error: DomainError) -> dict[str, Any]:
+    """The Lambda proxy answer to an error raised before any route runs."""
+    headers = {"Content-Type": content_types.APPLICATION_JSON} | (error_headers(error) or {})
+    return {"statusCode": int(status_of(error)), "headers": headers,
+            "body": error_body(error).model_dump_json(), "isBase64Encoded": False}
+
+
+
+def build_app(*routers: Router) -> BoardResolver:
     """A resolver with these routers, validation, CORS for the reads, and the error statuses.
 
     Give each resolver its own call: a Router serves the resolver that included it last, which
     is fine because the routes read only the resolver's own request and context."""
-    app: APIGatewayHttpResolver
+    app: BoardResolver
 
     def parse_body(body: str) -> Any:
         return bounded_json(body, _route_body(app))
 
-    app = APIGatewayHttpResolver(
+    app = BoardResolver(
         cors=CORSConfig(allow_origin="*", allow_headers=["Content-Type"], max_age=600),
         enable_validation=True,
         response_validation_error_http_code=HTTPStatus.INTERNAL_SERVER_ERROR,
@@ -1050,18 +1126,28 @@ def build_app(*routers: Router) -> APIGatewayHttpResolver:
 
 
 _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
+#: Every route's answer when the board's storage is busy or unreachable (nothing was written).
+_STORE_BUSY = {
+    "description": "The board's storage is busy (`StoreBusy`: throttled, or too many pushes at "
+                   "once) or did not answer (`StoreUnavailable`); nothing was written. Try again "
+                   "after Retry-After seconds.",
+    "headers": {"Retry-After": {"description": "Seconds to wait.", "schema": {"type": "integer"}}},
+    "content": {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}},
+}
 
 
 def openapi_document() -> str:
     """The OpenAPI document of the three functions' routes, as committed in functions/openapi.json.
 
-    It is Powertools' document for ``build_app(push_router, pull_router, admin_router)`` less one
-    thing that is not true of this API: the default "422 Validation Error" Powertools lists on
-    every validated route. Here a bad query or path parameter answers 400 and a bad body 422,
-    both with an :class:`ErrorBody`, and the routes list those responses themselves."""
+    It is Powertools' document for ``build_app(push_router, pull_router, admin_router)`` plus the
+    503 every route may answer (a busy store), less one thing that is not true of this API: the
+    default "422 Validation Error" Powertools lists on every validated route. Here a bad query
+    or path parameter answers 400 and a bad body 422, both with an :class:`ErrorBody`, and the
+    routes list those responses themselves."""
     document = json.loads(build_app(push_router, pull_router, admin_router).get_openapi_json_schema())
     for operations in document["paths"].values():
         for operation in operations.values():
+            operation["responses"]["503"] = _STORE_BUSY
             default = operation["responses"].get("422", {})
             if default.get("content", {}).get("application/json", {}).get("schema", {}).get(
                     "$ref") == _DEFAULT_422:

@@ -13,13 +13,15 @@ import json
 import math
 import re
 import secrets
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from datetime import UTC, datetime, timedelta
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 from drboard_assembler.aliases import alias_key
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
 from drboard_assembler.errors import field_path
+from drboard_assembler.limits import MAX_RECORD_BYTES
 from drboard_assembler.record import Alias, EvaluationRun, RaceType, Record
 from pydantic import TypeAdapter, ValidationError
 
@@ -40,6 +42,7 @@ from .errors import (
     NotSignedIn,
     RacerNotFound,
     SubmissionLimitReached,
+    SubmissionTooLarge,
     TooSoon,
 )
 from .identity import LOCAL_ORGANISER, Caller
@@ -53,6 +56,7 @@ from .models import (
     AuditPage,
     Board,
     BoardChanges,
+    BoardList,
     BoardPage,
     BoardRules,
     BoardSpec,
@@ -65,7 +69,6 @@ from .models import (
     EntryView,
     ExportedBoard,
     ExportedEntry,
-    ExportedSubmission,
     ExportLine,
     ExportPage,
     HistoryItem,
@@ -75,17 +78,20 @@ from .models import (
     Me,
     Moderation,
     PushReceipt,
+    RacerHistory,
     RacerStatus,
     RacerSummary,
     RacerTally,
     RacerView,
     SpeedPoint,
+    StoredSubmissionLine,
     Submission,
     SubmissionLimits,
     run_mismatches,
 )
 from .stores.base import (
     AliasConflict,
+    BadPageToken,
     BoardHasEntries,
     BoardStore,
     FingerprintTaken,
@@ -96,6 +102,7 @@ from .stores.base import (
 
 Clock = Callable[[], datetime]
 MAX_CURSOR_CHARS = 1024
+DEFAULT_PAGE = 100
 MAX_COMPARED = 4
 DEFAULT_TOP, MAX_TOP = 5, 20
 #: Insights read this many of a board's entries (and their records) as the field.
@@ -184,6 +191,7 @@ class LeaderboardService:
         nothing and is answered whatever the board's window and limits (it never counts).
         ``caller`` is who pushes: a racer may push only as the alias their sign-in holds (their
         first push claims it); organisers push as anyone; None (unsigned) is refused."""
+        check_record_size(record)
         now = self.clock()
         self._check_pusher(caller, record.racer, now)
         board = self._board_for(record, board_id, now).board
@@ -199,6 +207,7 @@ class LeaderboardService:
                                   max_submissions=board.max_submissions)
         audit = self._event(board.board_id, "push", caller, now, racer=record.racer,
                             submission_id=record.submission_id, detail=record.model_name)
+        self._archive(board.board_id, record)
         try:
             outcome = self.store.record_submission(submission, record, entry, limits,
                                                    fingerprints=evaluation_fingerprints(record),
@@ -211,9 +220,14 @@ class LeaderboardService:
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
             stored = self.store.get_submission(board.board_id, key, record.submission_id)
             return self._duplicate_receipt(stored or submission, record.racer)
-        if self.archive is not None:
-            self.archive.put(board.board_id, record)
         return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
+
+    def _archive(self, board_id: str, record: Record) -> None:
+        """Keep the record in the archive before the push commits: a failed archive write
+        stores nothing (a store error, 503). Its key is the record's content hash, so a push
+        refused or retried afterwards leaves at most an object no row refers to."""
+        if self.archive is not None:
+            self.archive.put(board_id, record)
 
     def _duplicate_receipt(self, stored: Submission, racer: str) -> PushReceipt:
         best = self.store.get_entry(stored.board_id, stored.racer_key)
@@ -297,13 +311,22 @@ class LeaderboardService:
     # ---- pull -----------------------------------------------------------------------------
 
     def boards(self) -> list[BoardView]:
+        """Every live board, by id (page after page)."""
+        return [view for page in _follow(self.boards_page) for view in page.boards]
+
+    def boards_page(self, limit: int = DEFAULT_PAGE, cursor: str | None = None) -> BoardList:
+        """One page of the live boards, by id: the store reads ``limit`` boards, and deleted
+        ones are left out, so a page may be short; ``next_cursor`` is None on the last."""
+        _check_limit(limit)
+        with _bad_cursor():
+            page = self.store.boards_page(_decode_page_cursor("boards", cursor), limit)
         now = self.clock()
-        return [_board_view(stored, now) for stored in self.store.list_boards()
-                if stored.board.deleted_at is None]
+        return BoardList(boards=[_board_view(stored, now) for stored in page.boards
+                                 if stored.board.deleted_at is None],
+                         next_cursor=_page_cursor("boards", page.after))
 
     def board_page(self, board_id: str, limit: int = 100, cursor: str | None = None) -> BoardPage:
-        if not 1 <= limit <= MAX_PAGE:
-            raise InvalidQuery(f"limit must be between 1 and {MAX_PAGE}")
+        _check_limit(limit)
         after = _Cursor.decode(cursor) if cursor else None
         if after is None:
             found, entries = self.store.front_page(board_id, limit)
@@ -333,18 +356,30 @@ class LeaderboardService:
         stored = self._live(board_id, self.store.get_board(board_id))
         return page_tag(_board_view(stored, self.clock()))
 
-    def racer(self, board_id: str, racer: str) -> RacerView:
+    def racer(self, board_id: str, racer: str, limit: int | None = None,
+              cursor: str | None = None) -> RacerView:
+        """The racer's entry, rank and best record, and their history on the board: ``limit``
+        submissions from ``cursor`` (every one when ``limit`` is None, for in-process callers)."""
         stored = self._require_board(board_id)
         key = racer_key(racer)
         entry, record = self._entry_and_record(board_id, racer)
         rank = self.store.count_better(board_id, entry.score_key) + 1
         shown = stored.board.designs_shown(self.clock())
+        if limit is None:
+            submissions, after = self.store.history(key, board_id), None
+        else:
+            _check_limit(limit)
+            with _bad_cursor():
+                page = self.store.history_page(key, board_id,
+                                               _decode_page_cursor("history", cursor), limit)
+            submissions, after = page.submissions, page.after
         return RacerView(
             board=_board_view(stored, self.clock()),
             racer=entry.racer,
             entry=_entry_view(entry, rank, self._leader(board_id), design=shown),
-            history=[_history_item(s, entry) for s in self.store.history(key, board_id)],
+            history=[_history_item(s, entry) for s in submissions],
             record=record if shown else None,
+            next_cursor=_page_cursor("history", after),
         )
 
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
@@ -398,15 +433,28 @@ class LeaderboardService:
         return entry, record
 
     def history(self, racer: str, board_id: str | None = None) -> list[HistoryItem]:
-        """The racer's submissions, oldest first, on one board or on every board."""
+        """The racer's submissions, oldest first, on one board or on every board (page after
+        page)."""
+        pages = _follow(lambda limit, cursor: self.history_page(racer, board_id, limit, cursor))
+        return [item for page in pages for item in page.history]
+
+    def history_page(self, racer: str, board_id: str | None = None, limit: int = DEFAULT_PAGE,
+                     cursor: str | None = None) -> RacerHistory:
+        """``limit`` of the racer's submissions, oldest first, on one board or on every live
+        board; ``next_cursor`` is None on the last page."""
+        _check_limit(limit)
         key = racer_key(racer)
         if board_id is not None:
             self._require_board(board_id)
+        with _bad_cursor():
+            page = self.store.history_page(key, board_id, _decode_page_cursor("history", cursor),
+                                           limit)
         items: list[HistoryItem] = []
-        for stored, submissions in self._by_board(self.store.history(key, board_id)):
+        for stored, submissions in self._by_board(page.submissions):
             best = self.store.get_entry(stored.board.board_id, key)
             items.extend(_history_item(submission, best) for submission in submissions)
-        return sorted(items, key=lambda item: (item.submitted_at, item.board_id))
+        items.sort(key=lambda item: (item.submitted_at, item.board_id, item.submission_id))
+        return RacerHistory(racer=racer, history=items, next_cursor=_page_cursor("history", page.after))
 
     def status(self, racer: str, board_id: str | None = None) -> RacerSummary:
         """Where the racer stands on each board they pushed to (or on one): their latest
@@ -597,8 +645,7 @@ class LeaderboardService:
 
     def audit(self, board_id: str, cursor: str | None = None, limit: int = 100) -> AuditPage:
         """The board's audit trail, oldest first, ``limit`` events at a time."""
-        if not 1 <= limit <= MAX_PAGE:
-            raise InvalidQuery(f"limit must be between 1 and {MAX_PAGE}")
+        _check_limit(limit)
         if self.store.get_board(board_id) is None:
             raise BoardNotFound(f"no board {board_id!r}")
         if cursor is not None and not _EVENT_ID.match(cursor):
@@ -675,13 +722,15 @@ class LeaderboardService:
             lines.append(ExportedBoard(exported_at=self.clock(), board=stored.board))
         if part == "entries":
             entries = self.store.top(board_id, EXPORT_ENTRIES, after)
-            lines.extend(ExportedEntry(entry=entry) for entry in entries)
+            # Models read from the store, already valid: put in the line as they are.
+            lines.extend(ExportedEntry.model_construct(entry=entry) for entry in entries)
             more = len(entries) == EXPORT_ENTRIES
             next_cursor = _export_cursor("entries", entries[-1].rank_key) if more else (
                 _export_cursor("submissions", None))
             return ExportPage(lines=lines, next_cursor=next_cursor)
-        page = self.store.submissions(board_id, after, EXPORT_SUBMISSIONS)
-        lines.extend(ExportedSubmission(submission=s, record=r) for s, r in page.submissions)
+        page = self.store.stored_submissions(board_id, after, EXPORT_SUBMISSIONS)
+        # Each record goes out as the JSON it was stored as (it was validated when pushed).
+        lines.extend(StoredSubmissionLine.of(s, raw) for s, raw in page.submissions)
         return ExportPage(lines=lines,
                           next_cursor=_export_cursor("submissions", page.after) if page.after else None)
 
@@ -709,12 +758,13 @@ class LeaderboardService:
         board = self._require_board(board_id).board
         record = item.record
         _check_belongs(record, board)
+        check_record_size(record)
         submission, entry = scored_write(record, board, item.submitted_at)
         audit = self._event(board_id, "import", caller, self.clock(), racer=record.racer,
                             submission_id=record.submission_id)
+        if self.store.get_submission(board_id, submission.racer_key, record.submission_id) is None:
+            self._archive(board_id, record)
         outcome = self.store.record_submission(submission, record, entry, audit=audit)
-        if not outcome.duplicate and self.archive is not None:
-            self.archive.put(board_id, record)
         return ImportReceipt(status="duplicate" if outcome.duplicate else "created",
                              board_id=board_id, submission_id=record.submission_id)
 
@@ -756,6 +806,16 @@ def is_default_board_id(board_id: str) -> bool:
             if board_id.endswith(suffix) and base and catalog.get(base) is not None:
                 return True
     return False
+
+
+def check_record_size(record: Record) -> None:
+    """Every board, embedded or in the cloud, holds a record to the same bound in bytes (its
+    JSON, as the assembler measures it); the record's model bounds the rest (string lengths,
+    laps, runs, curve points)."""
+    size = len(record.model_dump_json().encode("utf-8"))
+    if size > MAX_RECORD_BYTES:
+        raise SubmissionTooLarge(f"the record is {size} bytes, over the {MAX_RECORD_BYTES} "
+                                 "bytes a record may have")
 
 
 def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission, Entry]:
@@ -836,6 +896,54 @@ def _valid_board(**fields: Any) -> Board:
             "Value error, "), "type": e["type"]} for e in error.errors()]
         raise InvalidQuery(problems[0]["msg"] if len(problems) == 1 else "invalid board",
                            detail=problems) from None
+
+
+P = TypeVar("P", BoardList, RacerHistory)
+
+
+def _follow(read: Callable[[int, str | None], P]) -> Iterator[P]:
+    """Every page of a paginated read, at the largest page size."""
+    cursor: str | None = None
+    while True:
+        page = read(MAX_PAGE, cursor)
+        yield page
+        cursor = page.next_cursor
+        if cursor is None:
+            return
+
+
+@contextmanager
+def _bad_cursor() -> Iterator[None]:
+    try:
+        yield
+    except BadPageToken:
+        raise InvalidQuery("the cursor is not one this board gave out") from None
+
+
+def _check_limit(limit: int) -> None:
+    if not 1 <= limit <= MAX_PAGE:
+        raise InvalidQuery(f"limit must be between 1 and {MAX_PAGE}")
+
+
+def _page_cursor(kind: str, after: str | None) -> str | None:
+    """A store's page token as an opaque cursor that names what it pages through."""
+    if after is None:
+        return None
+    return base64.urlsafe_b64encode(json.dumps([kind, after]).encode()).decode().rstrip("=")
+
+
+def _decode_page_cursor(kind: str, text: str | None) -> str | None:
+    if not text:
+        return None
+    if len(text) > MAX_CURSOR_CHARS:
+        raise InvalidQuery("the cursor is not one this board gave out")
+    try:
+        named, after = json.loads(base64.urlsafe_b64decode(text + "=" * (-len(text) % 4)))
+        if named != kind or not isinstance(after, str):
+            raise ValueError
+    except (ValueError, TypeError, RecursionError, binascii.Error, UnicodeDecodeError):
+        raise InvalidQuery("the cursor is not one this board gave out") from None
+    return after
 
 
 def _export_cursor(part: str, after: str | None) -> str:

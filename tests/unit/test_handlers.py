@@ -101,6 +101,7 @@ def test_push_refuses_a_tampered_event_body(service: LeaderboardService) -> None
     record = json.loads(event["body"])
     record["evaluations"][0]["laps"][0]["time_ms"] += 1
     event["body"] = json.dumps(record)
+    event["headers"]["content-length"] = str(len(event["body"].encode()))
     response = push.lambda_handler(event, FakeLambdaContext())
     assert response["statusCode"] == 422
     assert service.boards() == []

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
@@ -65,6 +66,49 @@ class SubmissionPage(NamedTuple):
     after: str | None  # where the next page starts; None on the last page
 
 
+def stored_record(raw: str | bytes) -> Record:
+    """A record read back from the board's own store: every field is validated, but its content
+    hash, checked when the record was stored, is not recomputed (the record's own build skips
+    it the same way); that hash is most of the cost of reading a record."""
+    return Record.model_validate_json(raw, context={"draft": True})
+
+
+class BadPageToken(ValueError):
+    """A page token the store did not give out."""
+
+
+def page_token(parts: Sequence[str]) -> str:
+    """A store's page token: where its last page ended, as the strings of that position."""
+    return json.dumps(list(parts))
+
+
+def read_page_token(token: str, parts: int) -> list[str]:
+    """The position a page token holds; BadPageToken when it is not one of ``parts`` strings."""
+    try:
+        position = json.loads(token)
+    except (ValueError, RecursionError):
+        raise BadPageToken("not a page token") from None
+    if not (isinstance(position, list) and len(position) == parts
+            and all(isinstance(part, str) for part in position)):
+        raise BadPageToken("not a page token")
+    return position
+
+
+class StoredSubmissionPage(NamedTuple):
+    submissions: list[tuple[Submission, str | bytes]]  # each with its record's JSON as stored
+    after: str | None  # where the next page starts; None on the last page
+
+
+class BoardSlice(NamedTuple):
+    boards: list[StoredBoard]
+    after: str | None  # where the next page starts; None on the last page
+
+
+class HistorySlice(NamedTuple):
+    submissions: list[Submission]
+    after: str | None  # where the next page starts; None on the last page
+
+
 class BoardStore(Protocol):
     def get_board(self, board_id: str) -> StoredBoard | None:
         """The board and its number of racers, or None."""
@@ -78,6 +122,10 @@ class BoardStore(Protocol):
 
     def list_boards(self) -> list[StoredBoard]:
         """Every board, deleted ones included, ordered by id."""
+
+    def boards_page(self, after: str | None, limit: int) -> BoardSlice:
+        """Up to ``limit`` boards, deleted ones included, by id, after the store's page token
+        ``after`` (ValueError when it is not one the store gave out)."""
 
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
                           limits: SubmissionLimits | None = None,
@@ -104,6 +152,10 @@ class BoardStore(Protocol):
         """Up to ``limit`` of the board's submissions with their records, in a stable order,
         starting after the page token ``after``."""
 
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
+        """As ``submissions``, with each record the JSON it was stored as (not parsed): what an
+        export writes out."""
+
     def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
         """Up to ``limit`` entries in rank-key order, starting after the rank key ``after``."""
 
@@ -119,6 +171,11 @@ class BoardStore(Protocol):
 
     def history(self, racer_key: str, board_id: str | None = None) -> list[Submission]:
         """The racer's submissions, oldest first, on one board or all."""
+
+    def history_page(self, racer_key: str, board_id: str | None, after: str | None,
+                     limit: int) -> HistorySlice:
+        """Up to ``limit`` of the racer's submissions, oldest first (on one board or all),
+        after the store's page token ``after`` (BadPageToken when it is not one it gave out)."""
 
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         """The full record of one submission."""
@@ -153,4 +210,5 @@ class BoardStore(Protocol):
 
 class RecordArchive(Protocol):
     def put(self, board_id: str, record: Record) -> None:
-        """Keep the raw record of an accepted submission (S3 in the cloud)."""
+        """Keep the raw record of a submission (S3 in the cloud), before the push commits;
+        a failure raises a store error and the push stores nothing."""

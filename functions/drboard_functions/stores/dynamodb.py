@@ -44,7 +44,7 @@ from botocore.exceptions import ClientError
 from drboard_assembler.record import Record
 
 from .. import ranking
-from ..errors import BoardNotFound
+from ..errors import BoardNotFound, StoreBusy
 from ..models import (
     AliasClaim,
     AuditEvent,
@@ -55,14 +55,21 @@ from ..models import (
     SubmissionLimits,
     WriteOutcome,
 )
+from .aws_errors import translating
 from .base import (
     AliasConflict,
     AuditSlice,
     BoardHasEntries,
+    BoardSlice,
     FingerprintTaken,
+    HistorySlice,
     LimitReached,
     StoredBoard,
+    StoredSubmissionPage,
     SubmissionPage,
+    page_token,
+    read_page_token,
+    stored_record,
 )
 
 if TYPE_CHECKING:
@@ -87,10 +94,6 @@ BATCH_GET_KEYS = 100
 MAX_ATTEMPTS = 10  # of a push that loses a race with another push of the same racer or board
 BACKOFF_S = 0.01
 MAX_BACKOFF_S = 0.5
-
-
-class StoreContention(RuntimeError):
-    """A push kept losing races with concurrent pushes; nothing was written. Retry later."""
 
 
 def entry_sk(racer_key: str) -> str:
@@ -160,7 +163,12 @@ def record_item(board_id: str, record: Record) -> Item:
             "record": {"B": zlib.compress(record.model_dump_json().encode())}}
 
 
+@translating("the board's table")
 class DynamoDbStore:
+    """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
+    same board, raise StoreBusy; a timeout or a lost connection StoreUnavailable (nothing
+    written either way)."""
+
     def __init__(self, table_name: str, client: DynamoDBClient | None = None) -> None:
         self.table = table_name
         self.client: DynamoDBClient = client if client is not None else boto3.client("dynamodb")
@@ -211,6 +219,20 @@ class DynamoDbStore:
             "ExpressionAttributeValues": {":kind": _s(BOARD_KIND)},
         })
         return [_board(item) for item in items]
+
+    def boards_page(self, after: str | None, limit: int) -> BoardSlice:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": BOARDS_INDEX,
+            "KeyConditionExpression": "board_kind = :kind",
+            "ExpressionAttributeValues": {":kind": _s(BOARD_KIND)},
+        }
+        if after is not None:
+            [board_id] = read_page_token(after, 1)
+            request["ExclusiveStartKey"] = {"board_kind": _s(BOARD_KIND), "board": _s(board_id),
+                                            "sk": _s(BOARD_SK)}
+        items, more = self._page(request, limit)
+        return BoardSlice([_board(item) for item in items],
+                          page_token([items[-1]["board"]["S"]]) if more else None)
 
     # ---- submissions ----------------------------------------------------------------------
 
@@ -274,7 +296,8 @@ class DynamoDbStore:
             if improves or current is None:
                 return WriteOutcome(duplicate=False, improved=True, entry=entry)
             return WriteOutcome(duplicate=False, improved=False, entry=current)
-        raise StoreContention(f"gave up pushing to {board_id!r} after {MAX_ATTEMPTS} attempts")
+        raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up after {MAX_ATTEMPTS} "
+                        "attempts, nothing was stored; try again in a moment")
 
     def _count_submission(self, submission: Submission,
                           limits: SubmissionLimits | None) -> Any:
@@ -347,7 +370,8 @@ class DynamoDbStore:
                     raise
                 continue  # the entry improved meanwhile: remove what is there now
             return current
-        raise StoreContention(f"gave up removing an entry from {board_id!r}")
+        raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up removing the entry; "
+                        "try again in a moment")
 
     def restore_entry(self, entry: Entry) -> None:
         try:
@@ -427,6 +451,10 @@ class DynamoDbStore:
                           last_submitted_at=ranking.parse_timestamp(last["S"]) if last else None)
 
     def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        page = self.stored_submissions(board_id, after, limit)
+        return SubmissionPage([(s, stored_record(raw)) for s, raw in page.submissions], page.after)
+
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
         request: QueryInputTypeDef = {
             "TableName": self.table, "ConsistentRead": True, "Limit": limit,
             "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
@@ -438,12 +466,14 @@ class DynamoDbStore:
         page = self.client.query(**request)
         submissions = [Submission.model_validate_json(item["data"]["S"]) for item in page["Items"]]
         records = self._records(board_id, [s.submission_id for s in submissions])
-        pairs = [(s, records[s.submission_id]) for s in submissions if s.submission_id in records]
+        pairs: list[tuple[Submission, str | bytes]] = [
+            (s, records[s.submission_id]) for s in submissions if s.submission_id in records]
         more = page.get("LastEvaluatedKey") and page["Items"]
-        return SubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
+        return StoredSubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
 
-    def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, Record]:
-        records: dict[str, Record] = {}
+    def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, bytes]:
+        """The records' JSON, as stored, by submission id."""
+        records: dict[str, bytes] = {}
         keys = [{"board": _s(board_id), "sk": _s(record_sk(i))} for i in dict.fromkeys(submission_ids)]
         for start in range(0, len(keys), BATCH_GET_KEYS):
             pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
@@ -454,8 +484,8 @@ class DynamoDbStore:
                     _backoff(attempt)
                 answer = self.client.batch_get_item(RequestItems=pending)
                 for item in answer["Responses"].get(self.table, []):
-                    record = Record.model_validate_json(zlib.decompress(item["record"]["B"]))
-                    records[record.submission_id] = record
+                    submission_id = item["sk"]["S"].removeprefix(record_sk(""))
+                    records[submission_id] = zlib.decompress(item["record"]["B"])
                 pending = answer.get("UnprocessedKeys") or None
                 attempt += 1
         return records
@@ -524,6 +554,33 @@ class DynamoDbStore:
         mine = [s for s in submissions if s.racer_key == racer_key]
         return sorted(mine, key=lambda s: (s.submitted_at, s.board_id, s.submission_id))
 
+    def history_page(self, racer_key: str, board_id: str | None, after: str | None,
+                     limit: int) -> HistorySlice:
+        # The racer index holds every submission by time, on every board; one board's are
+        # filtered from it, so the page stays in time order.
+        values: dict[str, AttributeValueTypeDef] = {":racer": _s(racer_key)}
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RACER_INDEX,
+            "KeyConditionExpression": "history_racer = :racer",
+            "ExpressionAttributeValues": values,
+            "ProjectionExpression": "board, sk, submitted_at, #data",
+            "ExpressionAttributeNames": {"#data": "data"},
+        }
+        if board_id is not None:
+            request["FilterExpression"] = "board = :board"
+            values[":board"] = _s(board_id)
+        if after is not None:
+            submitted_at, board, sk = read_page_token(after, 3)
+            request["ExclusiveStartKey"] = {"history_racer": _s(racer_key),
+                                            "submitted_at": _s(submitted_at),
+                                            "board": _s(board), "sk": _s(sk)}
+        items, more = self._page(request, limit)
+        last = items[-1] if items else None
+        token = page_token([last["submitted_at"]["S"], last["board"]["S"], last["sk"]["S"]]) \
+            if more and last else None
+        return HistorySlice([Submission.model_validate_json(item["data"]["S"]) for item in items],
+                            token)
+
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         item = self._get(board_id, record_sk(submission_id))
         return Record.model_validate_json(zlib.decompress(item["record"]["B"])) if item else None
@@ -548,6 +605,22 @@ class DynamoDbStore:
             last = page.get("LastEvaluatedKey")
             if not last or (limit is not None and seen >= limit):
                 return
+            request["ExclusiveStartKey"] = last
+
+    def _page(self, request: QueryInputTypeDef, limit: int) -> tuple[list[Item], bool]:
+        """Up to ``limit`` items the query (and its filter) selects, and whether there are
+        more: pages are read until the limit is reached or the query ends."""
+        request = request.copy()
+        items: list[Item] = []
+        while True:
+            request["Limit"] = limit + 1 - len(items)
+            page = self.client.query(**request)
+            items.extend(page["Items"])
+            last = page.get("LastEvaluatedKey")
+            if len(items) > limit:
+                return items[:limit], True
+            if not last:
+                return items, False
             request["ExclusiveStartKey"] = last
 
     def _query(self, request: QueryInputTypeDef, limit: int | None = None) -> list[Item]:

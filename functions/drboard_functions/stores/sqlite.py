@@ -15,6 +15,7 @@ from pathlib import Path
 from drboard_assembler.record import Record
 
 from .. import ranking
+from ..errors import StoreBusy
 from ..models import (
     AliasClaim,
     AuditEvent,
@@ -29,10 +30,16 @@ from .base import (
     AliasConflict,
     AuditSlice,
     BoardHasEntries,
+    BoardSlice,
     FingerprintTaken,
+    HistorySlice,
     LimitReached,
     StoredBoard,
+    StoredSubmissionPage,
     SubmissionPage,
+    page_token,
+    read_page_token,
+    stored_record,
 )
 
 SCHEMA = """
@@ -81,6 +88,7 @@ CREATE TABLE IF NOT EXISTS aliases (
 """
 
 BUSY_TIMEOUT_S = 30.0
+BUSY_RETRY_AFTER_S = 1
 
 
 class SqliteStore:
@@ -118,13 +126,17 @@ class SqliteStore:
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
-        self._db.execute("BEGIN IMMEDIATE")
-        try:
-            yield self._db
-        except BaseException:
-            self._db.execute("ROLLBACK")
-            raise
-        self._db.execute("COMMIT")
+        """One write transaction. Another process holding the board past the busy timeout
+        is StoreBusy (nothing written)."""
+        with _busy_as_store_busy(self.path):
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield self._db
+            except BaseException:
+                if self._db.in_transaction:
+                    self._db.execute("ROLLBACK")
+                raise
+            self._db.execute("COMMIT")
 
     # ---- boards ---------------------------------------------------------------------------
 
@@ -158,6 +170,15 @@ class SqliteStore:
     def list_boards(self) -> list[StoredBoard]:
         rows = self._db.execute("SELECT board, participants, version FROM boards ORDER BY board_id")
         return [_board(row) for row in rows]
+
+    def boards_page(self, after: str | None, limit: int) -> BoardSlice:
+        rows = self._db.execute(
+            "SELECT board, participants, version, board_id FROM boards WHERE board_id > ? "
+            "ORDER BY board_id LIMIT ?",
+            (read_page_token(after, 1)[0] if after else "", limit + 1)).fetchall()
+        page = rows[:limit]
+        return BoardSlice([_board(row[:3]) for row in page],
+                          page_token([page[-1][3]]) if len(rows) > limit else None)
 
     # ---- submissions ----------------------------------------------------------------------
 
@@ -225,13 +246,16 @@ class SqliteStore:
                           last_submitted_at=ranking.parse_timestamp(last) if last else None)
 
     def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        page = self.stored_submissions(board_id, after, limit)
+        return SubmissionPage([(s, stored_record(raw)) for s, raw in page.submissions], page.after)
+
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
         rows = self._db.execute(
             "SELECT submission_id, submission, record FROM submissions "
             "WHERE board_id = ? AND submission_id > ? ORDER BY submission_id LIMIT ?",
             (board_id, after or "", limit)).fetchall()
-        page = [(Submission.model_validate_json(row[1]), Record.model_validate_json(row[2]))
-                for row in rows]
-        return SubmissionPage(page, rows[-1][0] if len(rows) == limit else None)
+        page = [(Submission.model_validate_json(row[1]), row[2]) for row in rows]
+        return StoredSubmissionPage(page, rows[-1][0] if len(rows) == limit else None)
 
     def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
         stored = self.get_board(board_id)
@@ -273,6 +297,21 @@ class SqliteStore:
                 "SELECT submission FROM submissions WHERE racer_key = ? AND board_id = ? "
                 "ORDER BY submitted_at", (racer_key, board_id))
         return [Submission.model_validate_json(row[0]) for row in rows]
+
+    def history_page(self, racer_key: str, board_id: str | None, after: str | None,
+                     limit: int) -> HistorySlice:
+        # Keyset pagination on (submitted_at, board_id, submission_id), in the racer index.
+        position = read_page_token(after, 3) if after else ["", "", ""]
+        on_board = "AND board_id = ? " if board_id is not None else ""
+        rows = self._db.execute(
+            "SELECT submission, submitted_at, board_id, submission_id FROM submissions "
+            f"WHERE racer_key = ? {on_board}AND (submitted_at, board_id, submission_id) > (?, ?, ?) "
+            "ORDER BY submitted_at, board_id, submission_id LIMIT ?",
+            (racer_key, *([board_id] if board_id is not None else []), *position, limit + 1),
+        ).fetchall()
+        page = rows[:limit]
+        return HistorySlice([Submission.model_validate_json(row[0]) for row in page],
+                            page_token(page[-1][1:]) if len(rows) > limit else None)
 
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         row = self._db.execute(
@@ -343,6 +382,18 @@ class SqliteStore:
         assert column in ("racer_key", "principal")
         row = db.execute(f"SELECT claim FROM aliases WHERE {column} = ?", (value,)).fetchone()
         return AliasClaim.model_validate_json(row[0]) if row else None
+
+
+@contextmanager
+def _busy_as_store_busy(path: str) -> Iterator[None]:
+    try:
+        yield
+    except sqlite3.OperationalError as error:
+        if error.sqlite_errorcode & 0xFF not in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED):
+            raise
+        raise StoreBusy(f"the board {path} is busy with another writer (waited "
+                        f"{BUSY_TIMEOUT_S:g} s); nothing was stored, try again",
+                        BUSY_RETRY_AFTER_S) from error
 
 
 def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
