@@ -31,12 +31,14 @@ FAILURE = 1
 #: The domain errors that are bad input (exit 2): a file, a record or a board setting refused, a
 #: board id taken, a board that cannot change. Named, so that nothing is imported to start.
 BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardMismatch",
-                              "InvalidQuery", "BoardExists", "BoardLocked"})
+                              "InvalidQuery", "BoardExists", "BoardLocked", "UnreadableBody",
+                              "UnsupportedBody"})
 #: The domain errors that are failures (exit 1): nothing found, a closed board, a used-up
-#: submission limit, a cooldown, a refusal, the board unreachable.
+#: submission limit, a cooldown, a refusal, the board unreachable or too busy to answer.
 FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
-                            "CopiedRun", "BoardUnreachable"})
+                            "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
+                            "StoreUnavailable"})
 
 
 @cache
