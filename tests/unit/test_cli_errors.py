@@ -81,12 +81,12 @@ def test_bad_input_is_2_and_failures_are_1_as_the_readme_says(
 
 
 def test_an_error_class_added_later_is_a_failure_with_its_message(capsys: pytest.CaptureFixture[str]) -> None:
-    class StoreBusy(domain.DomainError):
-        """The store is busy; try again (HTTP 503)."""
+    class CalendarClash(domain.DomainError):
+        """An error class no list names yet."""
 
-    assert _decided_by(StoreBusy) is None  # the first test above would name it
-    assert _answer(StoreBusy("the board is busy: try again in a minute"), capsys) == (
-        FAILURE, ["error: the board is busy: try again in a minute"])
+    assert _decided_by(CalendarClash) is None  # the first test above would name it
+    assert _answer(CalendarClash("the race clashes with another: pick a new time"), capsys) == (
+        FAILURE, ["error: the race clashes with another: pick a new time"])
 
 
 def test_files_that_do_not_read_are_bad_input(capsys: pytest.CaptureFixture[str]) -> None:
