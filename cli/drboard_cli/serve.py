@@ -30,6 +30,7 @@ from __future__ import annotations
 import asyncio
 import ipaddress
 import json
+import queue
 import re
 import socket
 import threading
@@ -161,15 +162,16 @@ class BoardServer:
         self.service = service
         self.desk = desk
         self.sign_in = SignIn(kind="join-code" if desk else "none")
-        self.app = build_app(push_router, pull_router, admin_router)
-        # Other computers are served by a resolver without the organiser routes at all; asking
-        # for one of those is answered 403 rather than 404.
-        self.public_app = build_app(push_router, pull_router)
-        self.organiser_routes = RouteMatcher(tagged_routes(self.app, ADMIN_TAG))
-        # Powertools keeps the request being resolved on the resolver classes themselves (one
-        # slot for every resolver in the process), so resolver calls take turns. Only they do:
-        # reading and writing sockets, event streams, joins and token look-ups go on meanwhile.
-        self.resolving = threading.Lock()
+        # Powertools keeps the request being resolved in the resolver (the resolver instance, as
+        # read below, and a class-wide slot it also writes): each request in flight takes a pair
+        # of resolvers of its own from this pool, one for each thread that runs them. Other
+        # computers are served by a resolver without the organiser routes at all; asking for one
+        # of those is answered 403 rather than 404.
+        self.resolvers: queue.SimpleQueue[_Resolvers] = queue.SimpleQueue()
+        for _ in range(RESOLVER_THREADS):
+            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, admin_router),
+                                          build_app(push_router, pull_router)))
+        self.organiser_routes = RouteMatcher(tagged_routes(build_app(admin_router), ADMIN_TAG))
         self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
         self.open_streams = 0
         self.socket = _listening_socket(address)
@@ -231,11 +233,12 @@ class BoardServer:
         caller = LOCAL_ORGANISER if local else self._racer(event["headers"])
         if caller is not None:
             event["requestContext"]["authorizer"] = {"lambda": caller.model_dump()}
-        app = self.app if local else self.public_app
-        with self.resolving:
-            app.append_context(service=self.service, sign_in=self.sign_in)
-            context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
-            return app.resolve(event, context)  # type: ignore[arg-type]
+        resolvers = self.resolvers.get()
+        try:
+            return _resolve(resolvers.local if local else resolvers.public, event, self.service,
+                            self.sign_in)
+        finally:
+            self.resolvers.put(resolvers)
 
     def _racer(self, headers: dict[str, str]) -> Caller | None:
         """The racer a request's bearer token signs in, or None."""
@@ -322,6 +325,23 @@ class BoardServer:
                 quiet = 0.0
             await asyncio.wait([gone], timeout=STREAM_POLL_S)
             quiet += STREAM_POLL_S
+
+
+@dataclass(frozen=True)
+class _Resolvers:
+    local: APIGatewayHttpResolver
+    public: APIGatewayHttpResolver
+
+
+def _resolve(app: APIGatewayHttpResolver, event: dict[str, Any], service: LeaderboardService,
+             sign_in: SignIn) -> dict[str, Any]:
+    # Every read of the request goes through the resolver instance: setting it there (before
+    # resolve also writes the class-wide slot) keeps each resolver on its own request.
+    context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
+    app.current_event = app._to_proxy_event(event)  # type: ignore[assignment]
+    app.lambda_context = context  # type: ignore[assignment]
+    app.append_context(service=service, sign_in=sign_in)
+    return app.resolve(event, context)  # type: ignore[arg-type]
 
 
 Scope = dict[str, Any]
