@@ -21,8 +21,8 @@ turns into the caller of the request (see :mod:`drboard_cli.joins`). Unsigned pu
 
 The HTTP side is uvicorn (h11): keep-alive without Nagle's delay, a listen backlog, idle
 connections let go (also one that connects and never finishes a request), graceful shutdown.
-Each request's resolver call runs in a small thread pool, so a slow one never holds the server
-loop; event streams and join requests need no thread of their own.
+Each request's resolver call runs in a small thread pool, each with resolvers of its own, so a
+slow one holds neither the server loop nor the other requests; an event stream holds no thread.
 """
 
 from __future__ import annotations
