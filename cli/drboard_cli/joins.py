@@ -99,12 +99,14 @@ class JoinDesk:
                             "one `drboard serve` shows now")
         token = secrets.token_urlsafe(32)
         principal = f"join:{secrets.token_hex(8)}"
-        self._db.execute("INSERT INTO joined VALUES (?, ?, ?)",
-                         (_digest(token), principal, self.clock().isoformat()))
+        with self._lock:  # one connection, shared by the server's threads
+            self._db.execute("INSERT INTO joined VALUES (?, ?, ?)",
+                             (_digest(token), principal, self.clock().isoformat()))
         return Joined(token=token, principal=principal)
 
     def caller(self, token: str) -> Caller | None:
         """The racer a bearer token belongs to, or None."""
-        row = self._db.execute("SELECT principal FROM joined WHERE token_sha256 = ?",
-                               (_digest(token),)).fetchone()
+        with self._lock:
+            row = self._db.execute("SELECT principal FROM joined WHERE token_sha256 = ?",
+                                   (_digest(token),)).fetchone()
         return Caller(principal=row[0], name=row[0]) if row else None

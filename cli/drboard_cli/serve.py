@@ -18,26 +18,38 @@ no board has that id yet.
 Racers on the network sign in with the join code `serve` prints (``POST /join``, answered here
 and not by the routes): each gets a token of their own, sent as a bearer token, which this server
 turns into the caller of the request (see :mod:`drboard_cli.joins`). Unsigned pushes are refused.
+
+The HTTP side is uvicorn (h11): keep-alive without Nagle's delay, a listen backlog, idle
+connections let go (also one that connects and never finishes a request), graceful shutdown.
+Each request's resolver call runs in a small thread pool, each with resolvers of its own, so a
+slow one holds neither the server loop nor the other requests; an event stream holds no thread.
 """
 
 from __future__ import annotations
 
+import asyncio
 import ipaddress
 import json
+import queue
 import re
+import socket
+import sys
 import threading
 import time
 import uuid
+from collections.abc import Awaitable, Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, unquote, urlsplit
 
+import uvicorn
 from drboard_functions.errors import DomainError, InvalidQuery, NotAuthorized
 from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
 from drboard_functions.service import LeaderboardService
 from pydantic import ValidationError
 from rich.console import Console
+from uvicorn.protocols.http.h11_impl import H11Protocol
 
 from .joins import JoinDesk, JoinRequest, WrongCode
 
@@ -47,8 +59,14 @@ if TYPE_CHECKING:
 MAX_BODY_BYTES = 1024 * 1024  # the routes apply the record's own, smaller bound
 STREAM_POLL_S = 0.5  # how often an event stream looks at its board (one small SQLite read)
 STREAM_KEEPALIVE_S = 15.0
+#: An idle keep-alive connection (a browser between two polls), or one that does not finish sending
+#: a request, is closed after this long; stopping the server never waits on a client for long.
 IDLE_CONNECTION_S = 5.0
 MAX_STREAMS = 64
+LISTEN_BACKLOG = 1024
+RESOLVER_THREADS = 8
+MAX_CONNECTIONS = 1000  # open connections and requests in flight; more are answered 503
+SHUTDOWN_GRACE_S = 30.0  # how long stopping waits for requests in flight
 _EVENTS_PATH = re.compile(r"^/boards/([^/]+)/events$")
 
 _log = Console(stderr=True, highlight=False)
@@ -68,19 +86,20 @@ def http_event(method: str, target: str, headers: dict[str, str], body: bytes,
                client_ip: str) -> dict[str, Any]:
     parts = urlsplit(target)
     now = time.time()
+    headers = {name.lower(): value for name, value in headers.items()}
     return {
         "version": "2.0",
         "routeKey": "$default",
         "rawPath": parts.path or "/",
         "rawQueryString": parts.query,
-        "headers": {name.lower(): value for name, value in headers.items()},
+        "headers": headers,
         "queryStringParameters": _query_parameters(parts.query),
         "requestContext": {
             "accountId": "000000000000",
             "apiId": "local",
-            "domainName": headers.get("Host", "localhost"),
+            "domainName": headers.get("host", "localhost"),
             "http": {"method": method, "path": parts.path or "/", "protocol": "HTTP/1.1",
-                     "sourceIp": client_ip, "userAgent": headers.get("User-Agent", "")},
+                     "sourceIp": client_ip, "userAgent": headers.get("user-agent", "")},
             "requestId": str(uuid.uuid4()),
             "routeKey": "$default",
             "stage": "$default",
@@ -133,40 +152,71 @@ def tagged_routes(app: APIGatewayHttpResolver, tag: str) -> set[tuple[str, str]]
             for method, operation in operations.items() if tag in operation.get("tags", [])}
 
 
-class BoardServer(ThreadingHTTPServer):
-    daemon_threads = False  # on shutdown, let requests in flight finish: nothing is lost
-    block_on_close = True
+class BoardServer:
+    """The board over HTTP. Binds at once; :meth:`serve_forever` serves until Ctrl-C or SIGTERM
+    (or :meth:`shutdown` from another thread), then :meth:`server_close` lets go of everything."""
 
     def __init__(self, address: tuple[str, int], service: LeaderboardService,
                  desk: JoinDesk | None = None) -> None:
         from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
 
-        super().__init__(address, _Handler)
         self.service = service
         self.desk = desk
         self.sign_in = SignIn(kind="join-code" if desk else "none")
-        self.app = build_app(push_router, pull_router, admin_router)
-        # Other computers are served by a resolver without the organiser routes at all; asking
-        # for one of those is answered 403 rather than 404.
-        self.public_app = build_app(push_router, pull_router)
-        self.organiser_routes = RouteMatcher(tagged_routes(self.app, ADMIN_TAG))
-        # One request at a time through the resolvers: they keep per-request context, and the
-        # embedded SQLite board has a single connection.
-        self.lock = threading.Lock()
-        self.closing = threading.Event()  # tells the event streams to end
-        self.streams = threading.BoundedSemaphore(MAX_STREAMS)
+        # Powertools keeps the request being resolved in the resolver (the resolver instance, as
+        # read below, and a class-wide slot it also writes): each request in flight takes a pair
+        # of resolvers of its own from this pool, one for each thread that runs them. Other
+        # computers are served by a resolver without the organiser routes at all; asking for one
+        # of those is answered 403 rather than 404.
+        self.resolvers: queue.SimpleQueue[_Resolvers] = queue.SimpleQueue()
+        for _ in range(RESOLVER_THREADS):
+            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, admin_router),
+                                          build_app(push_router, pull_router)))
+        self.organiser_routes = RouteMatcher(tagged_routes(build_app(admin_router), ADMIN_TAG))
+        self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
+        self.open_streams = 0
+        self.socket = _listening_socket(address)
+        self.server_address: tuple[str, int] = self.socket.getsockname()[:2]
+        self.server = uvicorn.Server(uvicorn.Config(
+            self, http=_TimedH11Protocol, loop="asyncio", lifespan="off", ws="none",
+            proxy_headers=False,  # the peer's own address decides who is local, never a header
+            server_header=False, log_config=None, access_log=False, backlog=LISTEN_BACKLOG,
+            timeout_keep_alive=int(IDLE_CONNECTION_S), limit_concurrency=MAX_CONNECTIONS,
+            timeout_graceful_shutdown=int(SHUTDOWN_GRACE_S)))
+        self._stopped = threading.Event()
+
+    # ---- the server's life ----------------------------------------------------------------------
+
+    def serve_forever(self) -> None:
+        """Serve until stopped. On the main thread, Ctrl-C and SIGTERM stop it gracefully (requests
+        in flight are answered, event streams end) and are then raised again for the caller."""
+        try:
+            self.server.run(sockets=[self.socket])
+        finally:
+            self._stopped.set()
+
+    def shutdown(self) -> None:
+        """Stop :meth:`serve_forever` running on another thread, and wait for it."""
+        self.server.should_exit = True
+        self._stopped.wait()
+
+    @property
+    def stopping(self) -> bool:
+        return self.server.should_exit
 
     def server_close(self) -> None:
-        self.closing.set()
-        super().server_close()
+        self.server.should_exit = True
+        self.pool.shutdown(wait=True)  # a push still being written is written
+        self.socket.close()
+
+    # ---- requests, as API Gateway events (synchronous: run in the pool) ------------------------
 
     def board_tag(self, board_id: str) -> str:
         """The board's page tag, or ``missing`` when there is no such board (yet)."""
-        with self.lock:
-            try:
-                return self.service.board_tag(board_id)
-            except DomainError:
-                return "missing"
+        try:
+            return self.service.board_tag(board_id)
+        except DomainError:
+            return "missing"
 
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
         from drboard_functions.routes import canonical_event
@@ -184,12 +234,12 @@ class BoardServer(ThreadingHTTPServer):
         caller = LOCAL_ORGANISER if local else self._racer(event["headers"])
         if caller is not None:
             event["requestContext"]["authorizer"] = {"lambda": caller.model_dump()}
-        app = self.app if local else self.public_app
-        with self.lock:
-            app.append_context(service=self.service, sign_in=self.sign_in)
-            context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
-            return app.resolve(event, context)  # type: ignore[arg-type]
-
+        resolvers = self.resolvers.get()
+        try:
+            return _resolve(resolvers.local if local else resolvers.public, event, self.service,
+                            self.sign_in)
+        finally:
+            self.resolvers.put(resolvers)
 
     def _racer(self, headers: dict[str, str]) -> Caller | None:
         """The racer a request's bearer token signs in, or None."""
@@ -212,6 +262,210 @@ class BoardServer(ThreadingHTTPServer):
         return {"statusCode": 201, "headers": {"Content-Type": "application/json"},
                 "body": joined.model_dump_json(), "isBase64Encoded": False}
 
+    # ---- ASGI -----------------------------------------------------------------------------------
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            return
+        path = (scope.get("raw_path") or scope["path"].encode()).decode("latin-1")
+        events = _EVENTS_PATH.match(path) if scope["method"] == "GET" else None
+        if events:
+            status = await self._stream(unquote(events[1]), receive, send)
+        else:
+            status = await self._answer(scope, path, receive, send)
+        query = scope["query_string"].decode("latin-1")
+        _log_request(f'{_client_ip(scope)} "{scope["method"]} {path}{"?" * bool(query)}{query}" {status}')
+
+    async def _answer(self, scope: Scope, path: str, receive: Receive, send: Send) -> int:
+        try:
+            body = await _request_body(scope, receive)
+        except _BodyTooLarge:
+            return await _reply_json(send, 413, "the request body is too large", close=True)
+        except TimeoutError:
+            return await _reply_json(send, 408, "the request body did not arrive in time", close=True)
+        query = scope["query_string"].decode("latin-1")
+        event = http_event(scope["method"], f"{path}?{query}" if query else path,
+                           _header_dict(scope), body, _client_ip(scope))
+        loop = asyncio.get_running_loop()
+        result = await loop.run_in_executor(self.pool, self.handle_event, event)
+        status, headers, data = _http_answer(result)
+        await send({"type": "http.response.start", "status": status, "headers": headers})
+        await send({"type": "http.response.body", "body": data})
+        return status
+
+    async def _stream(self, board_id: str, receive: Receive, send: Send) -> int:
+        """Server-Sent Events: the board's tag now, then each time it changes, until the client
+        goes or the server stops."""
+        if self.open_streams >= MAX_STREAMS:
+            return await _reply_json(send, 503, "too many open event streams", {"retry-after": "5"})
+        self.open_streams += 1
+        gone = asyncio.ensure_future(_disconnect(receive))
+        try:
+            await send({"type": "http.response.start", "status": 200, "headers": [
+                (b"content-type", b"text/event-stream"), (b"cache-control", b"no-cache"),
+                (b"x-content-type-options", b"nosniff")]})
+            await _more(send, b"retry: 2000\n\n")
+            await self._follow(board_id, gone, send)
+            await send({"type": "http.response.body", "body": b""})
+        finally:
+            gone.cancel()
+            self.open_streams -= 1
+        return 200
+
+    async def _follow(self, board_id: str, gone: asyncio.Future[None], send: Send) -> None:
+        loop = asyncio.get_running_loop()
+        sent, quiet = None, 0.0
+        while not self.stopping and not gone.done():
+            tag = await loop.run_in_executor(self.pool, self.board_tag, board_id)
+            if tag != sent:
+                await _more(send, f"event: board\ndata: {tag}\n\n".encode())
+                sent, quiet = tag, 0.0
+            elif quiet >= STREAM_KEEPALIVE_S:
+                await _more(send, b": keep-alive\n\n")
+                quiet = 0.0
+            await asyncio.wait([gone], timeout=STREAM_POLL_S)
+            quiet += STREAM_POLL_S
+
+
+@dataclass(frozen=True)
+class _Resolvers:
+    local: APIGatewayHttpResolver
+    public: APIGatewayHttpResolver
+
+
+def _resolve(app: APIGatewayHttpResolver, event: dict[str, Any], service: LeaderboardService,
+             sign_in: SignIn) -> dict[str, Any]:
+    # Every read of the request goes through the resolver instance: setting it there (before
+    # resolve also writes the class-wide slot) keeps each resolver on its own request.
+    context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
+    app.current_event = app._to_proxy_event(event)  # type: ignore[assignment]
+    app.lambda_context = context  # type: ignore[assignment]
+    app.append_context(service=service, sign_in=sign_in)
+    return app.resolve(event, context)  # type: ignore[arg-type]
+
+
+Scope = dict[str, Any]
+Receive = Callable[[], Awaitable[dict[str, Any]]]
+Send = Callable[[dict[str, Any]], Awaitable[None]]
+
+
+class _BodyTooLarge(Exception):
+    pass
+
+
+def _listening_socket(address: tuple[str, int]) -> socket.socket:
+    host, port = address
+    family, kind, proto, _, where = socket.getaddrinfo(host or None, port, type=socket.SOCK_STREAM,
+                                                       flags=socket.AI_PASSIVE)[0]
+    # The protocol number matters: asyncio turns Nagle's algorithm off (TCP_NODELAY) only on
+    # connections whose socket says IPPROTO_TCP, and an accepted socket copies its listener's.
+    listener = socket.socket(family, kind, proto)
+    listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    listener.bind(where)
+    listener.listen(LISTEN_BACKLOG)
+    return listener
+
+
+class _TimedH11Protocol(H11Protocol):
+    """uvicorn's h11 protocol, with its idle timeout also running before a request has arrived:
+    uvicorn arms it only once a response is sent, so a client that connects and sends nothing
+    (or half a request) would hold its connection for ever. A request's head must now arrive
+    within the timeout of connecting, or of the last response."""
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        super().connection_made(transport)  # type: ignore[arg-type]
+        self._head_due = self.loop.time() + self.timeout_keep_alive
+        self._arm_head_timeout()
+
+    def on_response_complete(self) -> None:
+        self._head_due = self.loop.time() + self.timeout_keep_alive
+        super().on_response_complete()
+
+    def data_received(self, data: bytes) -> None:
+        super().data_received(data)  # which disarms the timeout
+        if self.cycle is None or self.cycle.response_complete:  # still no complete request head
+            self._arm_head_timeout()
+
+    def _arm_head_timeout(self) -> None:
+        if self.timeout_keep_alive_task is None and not self.transport.is_closing():
+            self.timeout_keep_alive_task = self.loop.call_at(self._head_due,
+                                                             self.timeout_keep_alive_handler)
+
+
+def _log_request(line: str) -> None:
+    if _log.is_terminal:
+        _log.out(line, style="dim", highlight=False)
+    else:  # a log file: plain lines, at a hundredth of rich's cost per request
+        sys.stderr.write(line + "\n")
+
+
+def _client_ip(scope: Scope) -> str:
+    client = scope.get("client")
+    return str(client[0]) if client else ""
+
+
+def _header_dict(scope: Scope) -> dict[str, str]:
+    """The request's headers by lower-case name, a repeated one's values joined with commas."""
+    headers: dict[str, str] = {}
+    for raw_name, raw_value in scope["headers"]:
+        name, value = raw_name.decode("latin-1").lower(), raw_value.decode("latin-1")
+        headers[name] = f"{headers[name]},{value}" if name in headers else value
+    return headers
+
+
+async def _request_body(scope: Scope, receive: Receive) -> bytes:
+    declared = next((value for name, value in scope["headers"] if name.lower() == b"content-length"), b"")
+    if declared.isdigit() and int(declared) > MAX_BODY_BYTES:
+        raise _BodyTooLarge
+    body = bytearray()
+    while True:
+        message = await asyncio.wait_for(receive(), IDLE_CONNECTION_S)
+        body += message.get("body", b"")
+        if len(body) > MAX_BODY_BYTES:
+            raise _BodyTooLarge
+        if message["type"] != "http.request" or not message.get("more_body"):
+            return bytes(body)
+
+
+async def _disconnect(receive: Receive) -> None:
+    """Returns once the client has gone (or the response is over)."""
+    while (await receive())["type"] != "http.disconnect":
+        pass
+
+
+async def _more(send: Send, data: bytes) -> None:
+    await send({"type": "http.response.body", "body": data, "more_body": True})
+
+
+async def _reply_json(send: Send, status: int, message: str, headers: dict[str, str] | None = None,
+                      *, close: bool = False) -> int:
+    data = json.dumps({"message": message}).encode()
+    fields = {"content-type": "application/json", "content-length": str(len(data)), **(headers or {})}
+    if close:
+        fields["connection"] = "close"
+    await send({"type": "http.response.start", "status": status,
+                "headers": [(name.encode(), value.encode()) for name, value in fields.items()]})
+    await send({"type": "http.response.body", "body": data})
+    return status
+
+
+def _http_answer(result: dict[str, Any]) -> tuple[int, list[tuple[bytes, bytes]], bytes]:
+    """An API Gateway (v2) answer as HTTP: status, headers and body bytes."""
+    payload = result.get("body") or ""
+    data = payload.encode("utf-8") if isinstance(payload, str) else bytes(payload)
+    if result.get("isBase64Encoded"):
+        import base64
+
+        data = base64.b64decode(data)
+    fields = dict(result.get("headers") or {})
+    for name, values in (result.get("multiValueHeaders") or {}).items():
+        fields[name] = ", ".join(values)
+    headers = [(name.lower().encode("latin-1"), str(value).encode("latin-1"))
+               for name, value in fields.items() if name.lower() not in ("content-length", "connection")]
+    headers += [(b"set-cookie", str(cookie).encode("latin-1")) for cookie in result.get("cookies") or ()]
+    headers.append((b"content-length", str(len(data)).encode()))
+    return int(result.get("statusCode", 200)), headers, data
+
 
 def _refused(error: DomainError) -> dict[str, Any]:
     """The answer the routes would give the error (its status from the one mapping)."""
@@ -220,100 +474,3 @@ def _refused(error: DomainError) -> dict[str, Any]:
     return {"statusCode": int(status_of(error)), "headers": {"Content-Type": "application/json"},
             "body": error_body(error).model_dump_json(), "isBase64Encoded": False}
 
-
-class _Handler(BaseHTTPRequestHandler):
-    server: BoardServer
-    protocol_version = "HTTP/1.1"
-    # An idle keep-alive connection (a browser between two polls) is closed after this long,
-    # so stopping the server never waits on a client for long.
-    timeout = IDLE_CONNECTION_S
-
-    def do_GET(self) -> None:
-        self._dispatch()
-
-    def do_POST(self) -> None:
-        self._dispatch()
-
-    def do_PUT(self) -> None:
-        self._dispatch()
-
-    def do_PATCH(self) -> None:
-        self._dispatch()
-
-    def do_DELETE(self) -> None:
-        self._dispatch()
-
-    def do_OPTIONS(self) -> None:
-        self._dispatch()
-
-    def _dispatch(self) -> None:
-        events = _EVENTS_PATH.match(urlsplit(self.path).path) if self.command == "GET" else None
-        if events:
-            self._stream(unquote(events[1]))
-            return
-        length = int(self.headers.get("Content-Length") or 0)
-        if length > MAX_BODY_BYTES:
-            self._reply(413, {"content-type": "application/json"},
-                        json.dumps({"message": "the request body is too large"}).encode())
-            self.close_connection = True
-            return
-        body = self.rfile.read(length) if length else b""
-        if self.server.closing.is_set():
-            self.close_connection = True  # stopping: answer, then let the client go
-        event = http_event(self.command, self.path, dict(self.headers.items()), body,
-                           self.client_address[0])
-        result = self.server.handle_event(event)
-        payload = result.get("body") or ""
-        data = payload.encode("utf-8") if isinstance(payload, str) else bytes(payload)
-        if result.get("isBase64Encoded"):
-            import base64
-
-            data = base64.b64decode(data)
-        headers = dict(result.get("headers") or {})
-        for name, values in (result.get("multiValueHeaders") or {}).items():
-            headers[name] = ", ".join(values)
-        self._reply(int(result.get("statusCode", 200)), headers, data)
-
-    def _stream(self, board_id: str) -> None:
-        """Server-Sent Events: the board's tag now, then each time it changes, until the client
-        goes or the server stops."""
-        self.close_connection = True
-        if not self.server.streams.acquire(blocking=False):
-            self._reply(503, {"content-type": "application/json", "retry-after": "5"},
-                        json.dumps({"message": "too many open event streams"}).encode())
-            return
-        try:
-            self.send_response(200)
-            for name, value in (("Content-Type", "text/event-stream"), ("Cache-Control", "no-cache"),
-                                ("X-Content-Type-Options", "nosniff")):
-                self.send_header(name, value)
-            self.end_headers()
-            self.wfile.write(b"retry: 2000\n\n")
-            sent, quiet = None, 0.0
-            while not self.server.closing.is_set():
-                tag = self.server.board_tag(board_id)
-                if tag != sent:
-                    self.wfile.write(f"event: board\ndata: {tag}\n\n".encode())
-                    sent, quiet = tag, 0.0
-                elif quiet >= STREAM_KEEPALIVE_S:
-                    self.wfile.write(b": keep-alive\n\n")
-                    quiet = 0.0
-                self.wfile.flush()
-                self.server.closing.wait(STREAM_POLL_S)
-                quiet += STREAM_POLL_S
-        except (BrokenPipeError, ConnectionResetError, TimeoutError):
-            pass  # the client went away
-        finally:
-            self.server.streams.release()
-
-    def _reply(self, status: int, headers: dict[str, str], data: bytes) -> None:
-        self.send_response(status)
-        for name, value in headers.items():
-            if name.lower() not in ("content-length", "connection"):
-                self.send_header(name, str(value))
-        self.send_header("Content-Length", str(len(data)))
-        self.end_headers()
-        self.wfile.write(data)
-
-    def log_message(self, format: str, *args: Any) -> None:
-        _log.print(f"{self.client_address[0]} {format % args}", style="dim", markup=False)

@@ -601,7 +601,7 @@ def index_page(service: Service) -> Response[str]:
     responses={200: _PAGE_RESPONSE, 400: _error_response("A bad limit or cursor."),
                404: _error_response("No such board.")},
 )
-def board_view(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
+def board_view(board: BoardId, service: Service, request: Request, limit: Limit = DEFAULT_LIMIT,
                cursor: Cursor = None, screen: Screen = False,
                if_none_match: IfNoneMatch = None) -> Response[str]:
     board_id = _segment(board)
@@ -617,7 +617,7 @@ def board_view(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
     except BoardNotFound:  # a screen set up before the first push waits for the board
         return _page(web.waiting_page(board_id, screen), HTTPStatus.NOT_FOUND, LIVE_PAGE_HEADERS)
     etag = page_etag(f"{view}.{page_tag(page.board)}", limit, cursor)
-    origin = _origin(pull_router.current_event)
+    origin = _origin(request.resolved_event)
     url = origin + web.board_path(board_id)
     html = web.board_page(page, etag, screen=screen, now=service.clock(), url=url,
                           endpoint=origin, qr_svg=web.qr_svg(url) if screen else "")

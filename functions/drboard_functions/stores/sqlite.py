@@ -7,6 +7,7 @@ is an index range read of N rows whatever the board's size.
 from __future__ import annotations
 
 import sqlite3
+import threading
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -92,21 +93,46 @@ BUSY_RETRY_AFTER_S = 1
 
 
 class SqliteStore:
+    """One SQLite connection per thread that uses the store (WAL: readers run alongside the one
+    writer; writers take turns through BEGIN IMMEDIATE). ``:memory:`` is one database per
+    connection, so that board keeps a single connection for every thread."""
+
     def __init__(self, path: Path | str) -> None:
         self.path = str(path)
         if self.path != ":memory:":
             Path(self.path).parent.mkdir(parents=True, exist_ok=True)
-        # Autocommit mode: every write below opens its own BEGIN IMMEDIATE transaction.
-        self._db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT_S, isolation_level=None,
-                                   check_same_thread=False)
+        self._connections: list[sqlite3.Connection] = []
+        self._connecting = threading.Lock()
+        self._local = threading.local()
+        self._first = self._connect()
         self._enable_wal()
-        self._db.execute("PRAGMA synchronous=NORMAL")
         with self._write():
             for statement in filter(str.strip, SCHEMA.split(";")):
                 self._db.execute(statement)
             columns = {row[1] for row in self._db.execute("PRAGMA table_info(boards)")}
             if "version" not in columns:  # a board file from before versions
                 self._db.execute("ALTER TABLE boards ADD COLUMN version INTEGER NOT NULL DEFAULT 0")
+
+    def _connect(self) -> sqlite3.Connection:
+        # Autocommit mode: every write below opens its own BEGIN IMMEDIATE transaction.
+        db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT_S, isolation_level=None,
+                             check_same_thread=False)
+        db.execute("PRAGMA synchronous=NORMAL")
+        with self._connecting:
+            self._connections.append(db)
+        self._local.db = db
+        return db
+
+    @property
+    def _db(self) -> sqlite3.Connection:
+        """This thread's connection."""
+        db: sqlite3.Connection | None = getattr(self._local, "db", None)
+        if db is None:
+            if self.path == ":memory:":
+                db = self._local.db = self._first
+            else:
+                db = self._connect()
+        return db
 
     def _enable_wal(self) -> None:
         # Switching a new file to WAL needs a moment with no other writer, and SQLite does not
@@ -122,7 +148,9 @@ class SqliteStore:
                 time.sleep(0.01)
 
     def close(self) -> None:
-        self._db.close()
+        with self._connecting:
+            for db in self._connections:
+                db.close()
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
