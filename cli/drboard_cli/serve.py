@@ -28,6 +28,7 @@ slow one holds neither the server loop nor the other requests; an event stream h
 from __future__ import annotations
 
 import asyncio
+import base64
 import ipaddress
 import json
 import queue
@@ -44,7 +45,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, unquote, urlsplit
 
 import uvicorn
-from drboard_functions.errors import DomainError, InvalidQuery, NotAuthorized
+from drboard_functions.errors import BoardNotFound, DomainError, InvalidQuery, NotAuthorized
 from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
 from drboard_functions.service import LeaderboardService
 from pydantic import ValidationError
@@ -106,9 +107,17 @@ def http_event(method: str, target: str, headers: dict[str, str], body: bytes,
             "time": time.strftime("%d/%b/%Y:%H:%M:%S +0000", time.gmtime(now)),
             "timeEpoch": int(now * 1000),
         },
-        "body": body.decode("utf-8", errors="replace") if body else None,
-        "isBase64Encoded": False,
+        **_event_body(body),
     }
+
+
+def _event_body(body: bytes) -> dict[str, Any]:
+    """The body as API Gateway passes it: text as it is, anything else base64-encoded (which the
+    routes then refuse, saying it is not UTF-8)."""
+    try:
+        return {"body": body.decode("utf-8") if body else None, "isBase64Encoded": False}
+    except UnicodeDecodeError:
+        return {"body": base64.b64encode(body).decode("ascii"), "isBase64Encoded": True}
 
 
 def _query_parameters(query: str) -> dict[str, str] | None:
@@ -215,7 +224,7 @@ class BoardServer:
         """The board's page tag, or ``missing`` when there is no such board (yet)."""
         try:
             return self.service.board_tag(board_id)
-        except DomainError:
+        except BoardNotFound:
             return "missing"
 
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
@@ -454,8 +463,6 @@ def _http_answer(result: dict[str, Any]) -> tuple[int, list[tuple[bytes, bytes]]
     payload = result.get("body") or ""
     data = payload.encode("utf-8") if isinstance(payload, str) else bytes(payload)
     if result.get("isBase64Encoded"):
-        import base64
-
         data = base64.b64decode(data)
     fields = dict(result.get("headers") or {})
     for name, values in (result.get("multiValueHeaders") or {}).items():
@@ -468,9 +475,8 @@ def _http_answer(result: dict[str, Any]) -> tuple[int, list[tuple[bytes, bytes]]
 
 
 def _refused(error: DomainError) -> dict[str, Any]:
-    """The answer the routes would give the error (its status from the one mapping)."""
-    from drboard_functions.routes import error_body, status_of
+    """The answer the routes would give the error (its status and headers from the one mapping)."""
+    from drboard_functions.routes import refusal
 
-    return {"statusCode": int(status_of(error)), "headers": {"Content-Type": "application/json"},
-            "body": error_body(error).model_dump_json(), "isBase64Encoded": False}
+    return refusal(error)
 

@@ -198,6 +198,24 @@ def _asgi_request(server: BoardServer, client: tuple[str, int], method: str, pat
 SPEC = json.dumps({"board_id": "mine", "title": "Mine", "track": "reInvent2019"}).encode()
 
 
+def test_a_body_that_is_not_utf8_is_refused_saying_so(server: BoardServer) -> None:
+    connection = _connect(server)
+    connection.request("POST", "/boards", body=b'{"board_id": "cup-\xff"}',
+                       headers={"Content-Type": "application/json"})
+    response = connection.getresponse()
+    answer = json.loads(response.read())
+    assert (response.status, answer["error"]) == (400, "UnreadableBody")
+    assert "UTF-8" in answer["message"]
+
+
+def test_a_malformed_content_length_is_a_bad_request_and_the_server_goes_on(
+        server: BoardServer) -> None:
+    with socket.create_connection(("127.0.0.1", server.server_address[1]), timeout=10) as raw:
+        raw.sendall(b"POST /boards HTTP/1.1\r\nHost: x\r\nContent-Length: 12abc\r\n\r\n{}")
+        assert raw.recv(1024).startswith(b"HTTP/1.1 400")
+    assert _call(_connect(server), "GET", "/boards")[0] == 200
+
+
 def test_an_organiser_route_from_another_computer_is_403_whatever_its_headers(
         server: BoardServer) -> None:
     claims = [(b"x-forwarded-for", b"127.0.0.1"), (b"forwarded", b"for=127.0.0.1"),
