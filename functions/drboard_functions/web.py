@@ -109,7 +109,8 @@ LIVE_SCRIPT = """
   const main = document.querySelector("main[data-board]");
   if (!main || !window.fetch) return;
   const say = (text) => { const el = document.getElementById("live"); if (el) el.textContent = text; };
-  const POLL_MS = 3000, STREAMED_POLL_MS = 30000;
+  const POLL_MS = 3000, STREAMED_POLL_MS = 30000, GLOW_MS = 8000;
+  const marks = new Map();  // "fresh|improved|leader <racer>" -> when marked (GLOW_MS: the style's glow)
   let etag = main.dataset.etag || null, busy = false, streamed = false;
   const rows = () => new Map([...main.querySelectorAll("tr[data-racer]")]
     .map((row) => [row.dataset.racer, row]));
@@ -128,13 +129,22 @@ LIVE_SCRIPT = """
       main.innerHTML = next.innerHTML;
       main.dataset.missing = next.dataset.missing || "";
       etag = answer.headers.get("ETag") || next.dataset.etag || null;
-      for (const [racer, row] of rows()) {
+      const now = Date.now(), after = rows();
+      for (const [racer, row] of after) {
         const old = before.get(racer);
-        if (!old && hadEntries) row.classList.add("fresh");
-        else if (old && old.dataset.submission !== row.dataset.submission) row.classList.add("improved");
+        if (!old && hadEntries) marks.set("fresh " + racer, now);
+        else if (old && old.dataset.submission !== row.dataset.submission) marks.set("improved " + racer, now);
       }
       const top = main.querySelector("tr[data-racer]");
-      if (top && leader && top.dataset.racer !== leader.dataset.racer) top.classList.add("leader");
+      if (top && leader && top.dataset.racer !== leader.dataset.racer) marks.set("leader " + top.dataset.racer, now);
+      // A mark outlives the refreshes that follow it: its glow goes on where it was.
+      for (const [mark, since] of marks) {
+        if (now - since >= GLOW_MS) { marks.delete(mark); continue; }
+        const cut = mark.indexOf(" "), row = after.get(mark.slice(cut + 1));
+        if (!row) continue;
+        row.classList.add(mark.slice(0, cut));
+        for (const cell of row.cells) cell.style.animationDelay = (since - now) + "ms";
+      }
       say(answer.status === 404 ? "Waiting for the board's first push" : "Live");
       countdown();
     } catch (error) {
