@@ -21,7 +21,8 @@ from ..models import (
     RacerSummary,
     RacerView,
 )
-from ..service import DEFAULT_TOP, page_tag
+from ..service import DEFAULT_TOP
+from ..views import page_tag
 from .params import (
     DEFAULT_LIMIT,
     BoardId,

@@ -10,7 +10,8 @@ from aws_lambda_powertools.event_handler import Response
 from .. import web
 from ..errors import BoardNotFound
 from ..models import MAX_PAGE
-from ..service import DEFAULT_TOP, page_tag
+from ..service import DEFAULT_TOP
+from ..views import page_tag
 from .params import (
     DEFAULT_LIMIT,
     BoardId,

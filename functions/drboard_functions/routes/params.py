@@ -24,6 +24,7 @@ from aws_lambda_powertools.event_handler.openapi.params import Header, Path, Que
 from drboard_assembler import limits
 from pydantic import StringConstraints
 
+from ..cursors import MAX_CURSOR_CHARS
 from ..errors import (
     DomainError,
     InvalidQuery,
@@ -33,7 +34,7 @@ from ..errors import (
 )
 from ..identity import Caller, SignIn, caller_from_event
 from ..models import MAX_PAGE
-from ..service import MAX_COMPARED, MAX_CURSOR_CHARS, MAX_TOP, LeaderboardService
+from ..service import MAX_COMPARED, MAX_TOP, LeaderboardService
 
 DEFAULT_LIMIT = 100
 MAX_PATH_PARAM_CHARS = 256  # a board id or a racer alias, percent-encoded
