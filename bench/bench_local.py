@@ -35,8 +35,9 @@ from drboard_assembler.design import load_design
 from drboard_assembler.record import EvaluationRun, Lap, Record, SourceFile
 from drboard_functions import ranking
 from drboard_functions.models import Entry, Submission
-from drboard_functions.service import LeaderboardService, _design, racer_key
+from drboard_functions.service import LeaderboardService, racer_key
 from drboard_functions.stores.sqlite import SqliteStore
+from drboard_functions.views import design_of
 from figures import Report, p50_p95, timed_ms
 
 TRACK = "reInvent2019_track"  # "reInvent2019" resolves to it; its board id is the same
@@ -144,7 +145,7 @@ def seed_board(path: Path, racers: int, factory: RecordFactory) -> float:
         entry = Entry(
             board_id=BOARD_ID, racer=record.racer, racer_key=key,
             model_name=record.model_name, submission_id=record.submission_id,
-            achieved_at=now, score=score, design=_design(record), score_key=score_key,
+            achieved_at=now, score=score, design=design_of(record), score_key=score_key,
             rank_key=ranking.rank_key(score_key, now, key),
         )
         outcome = store.record_submission(submission, record, entry)

@@ -6,7 +6,6 @@ Regenerate after changing the Record: ``python -m drboard_assembler.schema``.
 from __future__ import annotations
 
 import json
-from importlib import resources
 from pathlib import Path
 
 from .record import record_json_schema
@@ -16,10 +15,6 @@ SCHEMA_FILE = "data/record.schema.json"
 
 def render() -> str:
     return json.dumps(record_json_schema(), indent=2, sort_keys=True) + "\n"
-
-
-def committed() -> str:
-    return resources.files("drboard_assembler").joinpath(SCHEMA_FILE).read_text("utf-8")
 
 
 def main() -> None:

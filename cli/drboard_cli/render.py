@@ -383,7 +383,7 @@ def racer_panel(view: RacerView) -> Group:
     if record.training:
         t = record.training
         summary.add_row("Training", f"{t.episodes} episodes on {t.track or DASH}, "
-                        f"{t.training_time_s / 3600:.1f} h, best reward {t.best_reward}, "
+                        f"{duration(int(t.training_time_s))}, best reward {t.best_reward}, "
                         f"{t.completed_laps} laps completed")
     if entry.flags:
         summary.add_row(f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))

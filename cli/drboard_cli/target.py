@@ -60,7 +60,6 @@ class BoardClient(Protocol):
 
 def local_board(db: Path) -> BoardClient:
     # Imported here so commands that need no board (assemble) start faster.
-    from drboard_functions.service import LeaderboardService
-    from drboard_functions.stores.sqlite import SqliteStore
+    from drboard_functions.services import sqlite_service
 
-    return LeaderboardService(SqliteStore(db))
+    return sqlite_service(db)

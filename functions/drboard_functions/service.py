@@ -6,8 +6,6 @@ returns the view models the API serialises and the CLI prints.
 
 from __future__ import annotations
 
-import base64
-import binascii
 import hashlib
 import json
 import math
@@ -25,7 +23,12 @@ from drboard_assembler.limits import MAX_RECORD_BYTES
 from drboard_assembler.record import Alias, EvaluationRun, RaceType, Record
 from pydantic import TypeAdapter, ValidationError
 
-from . import ranking
+from . import display, ranking
+from .cursors import RankCursor as _Cursor
+from .cursors import decode_export_cursor as _decode_export_cursor
+from .cursors import decode_page_cursor as _decode_page_cursor
+from .cursors import export_cursor as _export_cursor
+from .cursors import page_cursor as _page_cursor
 from .errors import (
     AliasTaken,
     Banned,
@@ -64,7 +67,6 @@ from .models import (
     BoardView,
     ComparedRacer,
     Comparison,
-    Design,
     Entry,
     EntryView,
     ExportedBoard,
@@ -99,9 +101,13 @@ from .stores.base import (
     RecordArchive,
     StoredBoard,
 )
+from .views import board_view as _board_view
+from .views import design_of as _design
+from .views import entry_view as _entry_view
+from .views import history_item as _history_item
+from .views import page_tag
 
 Clock = Callable[[], datetime]
-MAX_CURSOR_CHARS = 1024
 DEFAULT_PAGE = 100
 MAX_COMPARED = 4
 DEFAULT_TOP, MAX_TOP = 5, 20
@@ -841,9 +847,9 @@ def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission
 def _check_open(board: Board, now: datetime) -> None:
     status = board.status(now)
     if status is BoardStatus.UPCOMING:
-        raise BoardClosed(f"{board.board_id!r} is not open yet: it opens at {_when(board.opens_at)}")
+        raise BoardClosed(f"{board.board_id!r} is not open yet: it opens at {display.when(board.opens_at)}")
     if status is BoardStatus.CLOSED:
-        raise BoardClosed(f"{board.board_id!r} is closed: it closed at {_when(board.closes_at)}")
+        raise BoardClosed(f"{board.board_id!r} is closed: it closed at {display.when(board.closes_at)}")
 
 
 def _check_not_deleted(board: Board) -> None:
@@ -860,21 +866,9 @@ def _limit_error(board: Board, racer: str, tally: RacerTally, now: datetime) -> 
     last = tally.last_submitted_at or now
     ready = last + timedelta(seconds=board.cooldown_s)
     wait = max(1, math.ceil((ready - now).total_seconds()))
-    return TooSoon(f"{board.board_id!r} takes one submission every {_duration(board.cooldown_s)} "
-                   f"per racer: {racer} may submit again at {_when(ready)} (in {_duration(wait)})",
-                   wait)
-
-
-def _when(moment: datetime | None) -> str:
-    return moment.astimezone(UTC).strftime("%Y-%m-%d %H:%M:%S UTC") if moment else "?"
-
-
-def _duration(seconds: int) -> str:
-    minutes, secs = divmod(seconds, 60)
-    hours, minutes = divmod(minutes, 60)
-    parts = [f"{hours} h" if hours else "", f"{minutes} min" if minutes else "",
-             f"{secs} s" if secs else ""]
-    return " ".join(p for p in parts if p) or "0 s"
+    return TooSoon(f"{board.board_id!r} takes one submission every "
+                   f"{display.duration(board.cooldown_s)} per racer: {racer} may submit again at "
+                   f"{display.when(ready)} (in {display.duration(wait)})", wait)
 
 
 def _spec_track(spec: BoardSpec) -> tuple[str, Literal["cw", "ccw"] | None]:
@@ -925,45 +919,6 @@ def _check_limit(limit: int) -> None:
         raise InvalidQuery(f"limit must be between 1 and {MAX_PAGE}")
 
 
-def _page_cursor(kind: str, after: str | None) -> str | None:
-    """A store's page token as an opaque cursor that names what it pages through."""
-    if after is None:
-        return None
-    return base64.urlsafe_b64encode(json.dumps([kind, after]).encode()).decode().rstrip("=")
-
-
-def _decode_page_cursor(kind: str, text: str | None) -> str | None:
-    if not text:
-        return None
-    if len(text) > MAX_CURSOR_CHARS:
-        raise InvalidQuery("the cursor is not one this board gave out")
-    try:
-        named, after = json.loads(base64.urlsafe_b64decode(text + "=" * (-len(text) % 4)))
-        if named != kind or not isinstance(after, str):
-            raise ValueError
-    except (ValueError, TypeError, RecursionError, binascii.Error, UnicodeDecodeError):
-        raise InvalidQuery("the cursor is not one this board gave out") from None
-    return after
-
-
-def _export_cursor(part: str, after: str | None) -> str:
-    raw = json.dumps([part, after])
-    return base64.urlsafe_b64encode(raw.encode()).decode().rstrip("=")
-
-
-def _decode_export_cursor(text: str) -> tuple[str, str | None]:
-    if len(text) > MAX_CURSOR_CHARS:
-        raise InvalidQuery("the cursor is not one this board gave out")
-    try:
-        raw = base64.urlsafe_b64decode(text + "=" * (-len(text) % 4))
-        part, after = json.loads(raw)
-        if part not in ("entries", "submissions") or not (after is None or isinstance(after, str)):
-            raise ValueError
-    except (ValueError, TypeError, RecursionError, binascii.Error, UnicodeDecodeError):
-        raise InvalidQuery("the cursor is not one this board gave out") from None
-    return part, after
-
-
 def _check_belongs(record: Record, board: Board) -> None:
     problem = {
         "track": f"the run is on {record.track}, the board on {board.track}",
@@ -975,112 +930,3 @@ def _check_belongs(record: Record, board: Board) -> None:
     if problems:
         raise BoardMismatch(f"this run does not belong on {board.board_id!r}: "
                             + "; ".join(problems))
-
-
-def _design(record: Record) -> Design:
-    space = record.design.action_space
-    return Design(
-        algorithm=record.design.algorithm,
-        action_space=space.type,
-        actions=len(space.actions) if space.actions else None,
-        max_speed=space.max_speed,
-        max_steering=space.max_steering,
-        sensors=list(record.design.sensors),
-    )
-
-
-def _board_view(stored: StoredBoard, now: datetime) -> BoardView:
-    board = stored.board
-    track = default_catalog().get(board.track)
-    return BoardView(
-        board_id=board.board_id,
-        kind=board.kind,
-        title=board.title,
-        description=board.description,
-        track=board.track,
-        track_name=track.display_name if track else board.track,
-        direction=board.direction,
-        race_type=board.race_type,
-        method=board.rules.method,
-        min_laps=board.rules.min_laps,
-        flagged_runs=board.rules.flagged_runs,
-        designs=board.designs,
-        status=board.status(now),
-        opens_at=board.opens_at,
-        closes_at=board.closes_at,
-        cooldown_s=board.cooldown_s,
-        max_submissions=board.max_submissions,
-        participants=stored.participants,
-        version=stored.version,
-    )
-
-
-def page_tag(board: BoardView) -> str:
-    """What a board's page depends on besides its query: its version, and its status (which
-    the clock moves without a write)."""
-    return f"{board.version}.{board.status.value}"
-
-
-def _entry_view(entry: Entry, rank: int, leader: Entry | None, *, design: bool = True) -> EntryView:
-    gap = None
-    if entry.score.time_ms is not None and leader and leader.score.time_ms is not None:
-        gap = entry.score.time_ms - leader.score.time_ms
-    return EntryView(
-        rank=rank,
-        racer=entry.racer,
-        model_name=entry.model_name,
-        qualified=entry.score.qualified,
-        time_ms=entry.score.time_ms,
-        gap_ms=gap,
-        best_lap_ms=entry.score.best_lap_ms,
-        laps_completed=entry.score.laps_completed,
-        best_completion_pct=entry.score.best_completion_pct,
-        submitted_at=entry.achieved_at,
-        submission_id=entry.submission_id,
-        design=entry.design if design else None,
-        flags=entry.score.flags,
-    )
-
-
-def _history_item(submission: Submission, best: Entry | None) -> HistoryItem:
-    return HistoryItem(
-        board_id=submission.board_id,
-        submission_id=submission.submission_id,
-        submitted_at=submission.submitted_at,
-        model_name=submission.model_name,
-        qualified=submission.score.qualified,
-        time_ms=submission.score.time_ms,
-        best_lap_ms=submission.score.best_lap_ms,
-        laps_completed=submission.score.laps_completed,
-        best_completion_pct=submission.score.best_completion_pct,
-        is_best=best is not None and best.submission_id == submission.submission_id,
-        flags=submission.score.flags,
-    )
-
-
-class _Cursor:
-    """Where a page ended: enough to continue the order and the shared ranks."""
-
-    def __init__(self, rank_key: str, score_key: str, rank: int, position: int) -> None:
-        self.rank_key = rank_key
-        self.score_key = score_key
-        self.rank = rank
-        self.position = position
-
-    def encode(self) -> str:
-        raw = json.dumps([self.rank_key, self.score_key, self.rank, self.position])
-        return base64.urlsafe_b64encode(raw.encode()).decode().rstrip("=")
-
-    @classmethod
-    def decode(cls, text: str) -> _Cursor:
-        if len(text) > MAX_CURSOR_CHARS:
-            raise InvalidQuery("the cursor is not one this board gave out")
-        try:
-            raw = base64.urlsafe_b64decode(text + "=" * (-len(text) % 4))
-            rank_key, score_key, rank, position = json.loads(raw)
-            if not (isinstance(rank_key, str) and isinstance(score_key, str)
-                    and isinstance(rank, int) and isinstance(position, int)):
-                raise ValueError
-        except (ValueError, TypeError, RecursionError, binascii.Error, UnicodeDecodeError):
-            raise InvalidQuery("the cursor is not one this board gave out") from None
-        return cls(rank_key, score_key, rank, position)

@@ -12,6 +12,7 @@ import pytest
 from click.testing import CliRunner
 from drboard_assembler import Record
 from drboard_cli.main import cli
+from drboard_functions import display
 
 EXAMPLES = sorted(p for p in (Path(__file__).parents[2] / "examples").iterdir() if p.is_dir())
 COUNTER_CLOCKWISE = [p for p in EXAMPLES if not p.name.endswith("-cw")]
@@ -120,6 +121,18 @@ def test_show_tells_how_the_model_was_built(runner: CliRunner) -> None:
     view = json.loads(out)
     assert view["entry"]["rank"] == 1
     assert view["record"]["design"]["hyperparameters"]
+
+
+def test_show_says_how_long_the_model_trained_as_the_web_page_does(
+        runner: CliRunner, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("COLUMNS", "200")  # the training row on one line
+    push_examples(runner)
+    records = [Record.model_validate_json(run(runner, "assemble", e)[1]) for e in COUNTER_CLOCKWISE]
+    record = next(r for r in records if r.training and r.training.training_time_s >= 60)
+    assert record.training is not None
+    code, out, err = run(runner, "show", record.racer, "--track", record.track)
+    assert code == 0, err
+    assert f"{display.duration(int(record.training.training_time_s))}, best reward" in out
 
 
 def test_show_unknown_racer_fails(runner: CliRunner) -> None:

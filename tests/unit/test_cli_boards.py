@@ -271,7 +271,7 @@ def test_an_upcoming_board_refuses_pushes_until_it_opens(drboard: Drboard, clock
     assert drboard.json("boards", "--status", "upcoming")[0]["board_id"] == "event"
     result = push_as(drboard, COUNTER_CLOCKWISE[0])
     assert result.exit_code == 1
-    assert "not open yet" in result.stderr and "2026-03-01 14:00:00 UTC" in result.stderr
+    assert "not open yet" in result.stderr and "2026-03-01 14:00 UTC" in result.stderr
     clock.advance(hours=2)
     assert push_as(drboard, COUNTER_CLOCKWISE[0]).exit_code == 0
 
@@ -296,7 +296,7 @@ def test_a_cooldown_push_says_when_to_try_again(drboard: Drboard, clock: Clock) 
     clock.advance(minutes=10)
     result = push_as(drboard, COUNTER_CLOCKWISE[1])
     assert result.exit_code == 1
-    assert "Ada may submit again at 2026-03-01 12:30:00 UTC (in 20 min)" in result.stderr
+    assert "Ada may submit again at 2026-03-01 12:30 UTC (in 20 min)" in result.stderr
     assert push_as(drboard, COUNTER_CLOCKWISE[0]).exit_code == 0, "a duplicate is always answered"
     assert push_as(drboard, COUNTER_CLOCKWISE[2], racer="Bob").exit_code == 0, "per racer"
     clock.advance(minutes=20)

@@ -16,6 +16,7 @@ from urllib.parse import quote, urlencode
 import pytest
 from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, DependencyResolutionError
 from drboard_assembler import limits
+from drboard_assembler.errors import field_path
 from drboard_assembler.record import Record
 from drboard_functions import web
 from drboard_functions.errors import (
@@ -50,7 +51,6 @@ from drboard_functions.routes import (
     MAX_BOARD_BODY_BYTES,
     admin_router,
     build_app,
-    field_path,
     pull_router,
     push_router,
 )

@@ -22,7 +22,17 @@ def contrast(foreground: str, background: str) -> float:
     return (light + 0.05) / (dark + 0.05)
 
 
-@pytest.mark.parametrize(("foreground", "background"), web.TEXT_ON_BACKGROUND)
+#: Every text colour of the pages, with each background it sits on.
+TEXT_ON_BACKGROUND = (
+    [(colour, web.BACKGROUND) for colour in (web.TEXT, web.MUTED, web.LINK)]
+    + [(web.TEXT, glow) for glow in web.ROW_GLOW.values()]
+    + [(web.MUTED, glow) for glow in web.ROW_GLOW.values()]
+    + [(text, fill) for fill, text in web.MEDALS.values()]
+    + [(text, fill) for fill, text in web.STATUS_COLOURS.values()]
+)
+
+
+@pytest.mark.parametrize(("foreground", "background"), TEXT_ON_BACKGROUND)
 def test_every_text_colour_reads_at_4_5_to_1(foreground: str, background: str) -> None:
     assert contrast(foreground, background) >= 4.5, (foreground, background)
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import signal
 import threading
 from datetime import UTC, datetime
-from pathlib import Path
 from typing import Any
 
 import click
@@ -33,7 +32,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
     (`drboard board ...`, `audit`, `export`, `import`) are answered only on this machine itself.
     Ctrl-C stops it; every push that was answered is saved.
     """
-    from drboard_functions.service import LeaderboardService
+    from drboard_functions.services import dynamodb_service, sqlite_service
 
     from ..joins import JoinDesk
     from ..serve import BoardServer
@@ -42,14 +41,10 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         if endpoint_url and not table:
             raise click.UsageError("--endpoint-url goes with --table")
         if table:
-            import boto3
-            from drboard_functions.stores.dynamodb import DynamoDbStore
-
-            client = boto3.client("dynamodb", endpoint_url=endpoint_url)
-            service = LeaderboardService(DynamoDbStore(table, client=client))
+            service = dynamodb_service(table, endpoint_url=endpoint_url)
             where = f"DynamoDB table {table}" + (f" at {endpoint_url}" if endpoint_url else "")
         else:
-            service = LeaderboardService(local_board_store(ctx.db))
+            service = sqlite_service(ctx.db)
             where = str(ctx.db)
         desk = JoinDesk(ctx.db.with_name(ctx.db.stem + ".joined.sqlite"), code_minutes)
         server = BoardServer((host, port), service, desk)
@@ -100,8 +95,3 @@ def _reachable(host: str) -> str:
         except OSError:
             return socket.gethostname()
 
-
-def local_board_store(db: Path) -> Any:
-    from drboard_functions.stores.sqlite import SqliteStore
-
-    return SqliteStore(db)

@@ -1,0 +1,283 @@
+"""The organisers' routes: boards, moderation, audit, export and import (IAM-signed in the
+cloud; answered by ``drboard serve`` only to the computer it runs on)."""
+
+from __future__ import annotations
+
+import json
+from http import HTTPStatus
+from typing import Annotated, Any
+
+from aws_lambda_powertools.event_handler import Response, content_types
+from aws_lambda_powertools.event_handler.openapi.params import Body
+from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
+from drboard_assembler import limits
+
+from ..errors import InvalidQuery
+from ..models import (
+    AuditPage,
+    Board,
+    BoardChanges,
+    BoardSpec,
+    BoardView,
+    ExportPage,
+    ImportedSubmission,
+    ImportReceipt,
+    Moderation,
+)
+from .params import (
+    ADMIN_TAG,
+    BOARD_BODY,
+    CHANGES_BODY,
+    DEFAULT_LIMIT,
+    IMPORT_BODY,
+    IMPORT_HEADROOM_BYTES,
+    SIGV4,
+    BoardId,
+    Cursor,
+    Limit,
+    Organiser,
+    RacerAlias,
+    RequestBody,
+    Service,
+    admin_router,
+    segment,
+    takes,
+)
+from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_answer, json_response
+
+
+def _admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
+                     body: RequestBody | None = None,
+                     errors: dict[int, str] | None = None,
+                     also: dict[int, OpenAPIResponse] | None = None) -> dict[int, OpenAPIResponse]:
+    """An organiser route's answers: its own, the refusal of unsigned requests, a body's (413,
+    415, 422), then its own errors and other answers (which replace the general ones)."""
+    responses: dict[int, OpenAPIResponse] = {ok_status: ok, 400: error_response(BAD_PATH),
+                                             403: error_response(UNSIGNED)}
+    if body is not None:
+        verb = "are" if body.name.endswith("s") else "is"
+        responses[400] = error_response(BAD_PATH + UNREADABLE)
+        responses[413] = error_response(f"The body is over {body.max_bytes} bytes.")
+        responses[415] = error_response("The body is not JSON.")
+        responses[422] = error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
+    responses |= {status: error_response(text) for status, text in (errors or {}).items()}
+    return responses | (also or {})
+
+
+_ADMIN: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
+_NO_BOARD = "No such board (or it was deleted)."
+_DEFAULT_BOARD = ("The board is a track's default board, which keeps the default rules "
+                  "(`BoardLocked`).")
+
+
+@admin_router.post(
+    "/boards",
+    status_code=HTTPStatus.CREATED,
+    summary="Create a named board",
+    description="A board of the organiser's own on a track, with its title, timing method, window "
+                "(`opens_at`, `closes_at`) and limits (`cooldown_s` between a racer's "
+                "submissions, `max_submissions` per racer). Racers push to it by its id.",
+    responses=_admin_responses(
+        json_response("The board was created.", BoardView), ok_status=HTTPStatus.CREATED,
+        body=BOARD_BODY, errors={
+            400: "An unknown or ambiguous track (the closest matches are listed), a window that "
+                 "closes before it opens, or a bad board id.",
+            409: "A board with this id exists, or the id is a track's default board's "
+                 "(`BoardExists`)."}),
+    **_ADMIN,
+)
+@takes(BOARD_BODY)
+def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
+                 service: Service, organiser: Organiser) -> Response[BoardView]:
+    return json_answer(HTTPStatus.CREATED, service.create_board(spec, caller=organiser))
+
+
+@admin_router.patch(
+    "/boards/<board>",
+    summary="Change a named board",
+    description="Only the fields in the body change; `null` clears a window's end or a limit. "
+                "The timing method and minimum laps change only while the board has no entries.",
+    responses=_admin_responses(
+        json_response("The board as it is now.", BoardView), body=CHANGES_BODY, errors={
+            400: "The title or method cleared, a window that closes before it opens, or a bad "
+                 "board id.",
+            404: _NO_BOARD,
+            409: "The change would rescore entries already on the board, or the board is a "
+                 "track's default board (`BoardLocked`)."}),
+    **_ADMIN,
+)
+@takes(CHANGES_BODY)
+def update_board(board: BoardId,
+                 changes: Annotated[BoardChanges, Body(description="The fields to change.")],
+                 service: Service, organiser: Organiser) -> BoardView:
+    return service.update_board(segment(board), changes, caller=organiser)
+
+
+@admin_router.post(
+    "/boards/<board>/close",
+    summary="Close a named board now",
+    description="Pushes are refused from now on (`BoardClosed`); an upcoming board closes "
+                "without ever opening. Closing a closed board changes nothing.",
+    responses=_admin_responses(json_response("The closed board.", BoardView),
+                               errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
+    **_ADMIN,
+)
+def close_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
+    return service.close_board(segment(board), caller=organiser)
+
+
+@admin_router.delete(
+    "/boards/<board>",
+    summary="Delete a named board (softly)",
+    description="The board disappears from lists, pushes and reads; nothing is erased, and "
+                "`POST /boards/{board}/restore` brings it back whole.",
+    responses=_admin_responses(json_response("The deleted board.", BoardView),
+                               errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
+    **_ADMIN,
+)
+def delete_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
+    return service.delete_board(segment(board), caller=organiser)
+
+
+@admin_router.post(
+    "/boards/<board>/restore",
+    summary="Restore a deleted board",
+    description="The board comes back with every entry and submission it had.",
+    responses=_admin_responses(json_response("The restored board.", BoardView),
+                               errors={404: "No such board."}),
+    **_ADMIN,
+)
+def restore_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
+    return service.restore_board(segment(board), caller=organiser)
+
+
+@admin_router.get(
+    "/boards/<board>/export",
+    summary="Export a board, a page at a time",
+    description="The first page starts with the board; then come its entries in rank order, "
+                "then every submission with its record. Pass the answer's `next_cursor` as "
+                "`cursor` until it is null. Deleted boards export too.",
+    responses=_admin_responses(json_response("One page of the export.", ExportPage),
+                               errors={400: "A bad cursor or board id.", 404: "No such board."}),
+    **_ADMIN,
+)
+def export_board(board: BoardId, service: Service, organiser: Organiser,
+                 cursor: Cursor = None) -> Response[Any]:
+    page = service.export_page(segment(board), cursor or None)
+    # Each line as it serialises itself: a stored record goes out as it was stored, unparsed.
+    lines = ",".join(line.model_dump_json() for line in page.lines)
+    body = f'{{"lines":[{lines}],"next_cursor":{json.dumps(page.next_cursor)}}}'
+    return Response(status_code=HTTPStatus.OK, content_type=content_types.APPLICATION_JSON, body=body)
+
+
+@admin_router.put(
+    "/boards/<board>/import",
+    status_code=HTTPStatus.CREATED,
+    summary="Import a board from an export",
+    description="Creates the exported board (its `board_id` must be the path's) unless a board "
+                "with that id exists, whose own settings then stay: importing twice changes "
+                "nothing. Then replay its submissions with `POST /boards/{board}/imports`.",
+    responses=_admin_responses(
+        json_response("The board was created.", BoardView), ok_status=HTTPStatus.CREATED,
+        body=BOARD_BODY, errors={
+            400: "The body's `board_id` is not the path's, or is not a board id.",
+            404: "A deleted board has this id: restore it, or import under another id."},
+        also={200: json_response("A board with this id exists; it keeps its own settings and "
+                                  "nothing changed.", BoardView)}),
+    **_ADMIN,
+)
+@takes(BOARD_BODY)
+def import_board(board: BoardId,
+                 exported: Annotated[Board, Body(description="The `board` of an export's first line.")],
+                 service: Service, organiser: Organiser) -> Response[BoardView]:
+    board_id = segment(board)
+    if exported.board_id != board_id:
+        raise InvalidQuery(f"the body is board {exported.board_id!r} but the path names {board_id!r}",
+                           detail=[{"loc": "board_id", "msg": f"should be {board_id!r}",
+                                    "type": "value_error"}])
+    view, created = service.import_board(exported, caller=organiser)
+    return json_answer(HTTPStatus.CREATED if created else HTTPStatus.OK, view)
+
+
+@admin_router.post(
+    "/boards/<board>/imports",
+    status_code=HTTPStatus.CREATED,
+    summary="Replay one exported submission",
+    description="Stores the record as first submitted at `submitted_at`, scored by this board's "
+                "rules; the board's window and limits do not apply. Importing the same "
+                "submission twice changes nothing. The body is bounded at the record's bound plus "
+                f"{IMPORT_HEADROOM_BYTES} bytes, and its record at the record's own bound.",
+    responses=_admin_responses(
+        json_response("The submission was stored.", ImportReceipt), ok_status=HTTPStatus.CREATED,
+        body=IMPORT_BODY, errors={
+            404: _NO_BOARD,
+            413: f"The body is over {IMPORT_BODY.max_bytes} bytes, or its record over "
+                 f"{limits.MAX_RECORD_BYTES}.",
+            422: "The submission is not valid (field-level `detail`), or its run does not "
+                 "belong on this board (`BoardMismatch`)."},
+        also={200: json_response("The submission was already on the board; nothing changed.",
+                                  ImportReceipt)}),
+    **_ADMIN,
+)
+@takes(IMPORT_BODY)
+def import_submission(board: BoardId,
+                      item: Annotated[ImportedSubmission, Body(description="A submission line of "
+                                                                           "an export: its record "
+                                                                           "and `submitted_at`.")],
+                      service: Service, organiser: Organiser) -> Response[ImportReceipt]:
+    receipt = service.import_submission(segment(board), item, caller=organiser)
+    return json_answer(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
+
+
+@admin_router.delete(
+    "/boards/<board>/racers/<racer>",
+    summary="Take a racer's entry off a board",
+    description="The racer's submissions stay (and show in the audit trail); the standings are "
+                "recomputed without them. Their next push makes a new entry.",
+    responses=_admin_responses(json_response("What the board now shows of the racer.", Moderation),
+                               errors={404: "No such board, or the racer never pushed to it."}),
+    **_ADMIN,
+)
+def remove_entry(board: BoardId, racer: RacerAlias, service: Service,
+                 organiser: Organiser) -> Moderation:
+    return service.remove_entry(segment(board), segment(racer), caller=organiser)
+
+
+@admin_router.put(
+    "/boards/<board>/bans/<racer>",
+    summary="Ban a racer from a board",
+    description="Their pushes are refused (`Banned`) and their entry comes off the board; their "
+                "submissions stay, and `DELETE` on the same path puts their best back.",
+    responses=_admin_responses(json_response("The racer is banned.", Moderation),
+                               errors={404: _NO_BOARD}),
+    **_ADMIN,
+)
+def ban_racer(board: BoardId, racer: RacerAlias, service: Service, organiser: Organiser) -> Moderation:
+    return service.ban(segment(board), segment(racer), caller=organiser)
+
+
+@admin_router.delete(
+    "/boards/<board>/bans/<racer>",
+    summary="Lift a racer's ban",
+    description="The racer may push again, and their best submission is back on the board.",
+    responses=_admin_responses(json_response("The racer is no longer banned.", Moderation),
+                               errors={404: _NO_BOARD}),
+    **_ADMIN,
+)
+def unban_racer(board: BoardId, racer: RacerAlias, service: Service,
+                organiser: Organiser) -> Moderation:
+    return service.unban(segment(board), segment(racer), caller=organiser)
+
+
+@admin_router.get(
+    "/boards/<board>/audit",
+    summary="A board's audit trail",
+    description="Every accepted push and every organiser action on the board, oldest first: "
+                "who (`actor`), when, what. Pass `next_cursor` as `cursor` for the next page.",
+    responses=_admin_responses(json_response("One page of the audit trail.", AuditPage),
+                               errors={400: "A bad limit or cursor.", 404: "No such board."}),
+    **_ADMIN,
+)
+def get_audit(board: BoardId, service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
+              cursor: Cursor = None) -> AuditPage:
+    return service.audit(segment(board), cursor or None, limit)

@@ -1,0 +1,98 @@
+"""What the routes answer: the error body, the OpenAPI descriptions of answers, JSON and HTML
+answers, and the ETag of a board's page."""
+
+from __future__ import annotations
+
+import hashlib
+from functools import cache
+from http import HTTPStatus
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as distribution_version
+from typing import Any
+
+from aws_lambda_powertools.event_handler import Response, content_types
+from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
+from drboard_assembler import __version__ as assembler_version
+from pydantic import BaseModel, ConfigDict, Field
+
+HTML = "text/html; charset=utf-8"
+#: The web pages load nothing and run no script: only their own inline style.
+PAGE_HEADERS = {
+    "Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'; base-uri 'none'; "
+                               "form-action 'none'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff",
+    "Cache-Control": "no-store",
+}
+
+
+@cache  # reading the package's metadata costs a third of a pull: once per process is enough
+def api_version() -> str:
+    try:
+        return distribution_version("drboard")
+    except PackageNotFoundError:  # pragma: no cover - a Lambda bundle without dist metadata
+        return assembler_version
+
+
+# ---- response and error models --------------------------------------------------------------
+
+
+class FieldProblem(BaseModel):
+    """One problem with one field: ``loc`` is a path such as ``evaluations[0].laps[2].time_ms``."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    loc: str
+    msg: str
+    type: str
+
+
+class ErrorBody(BaseModel):
+    """Every error answer: the domain error's name, a message for people, and field detail."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    error: str
+    message: str
+    detail: list[FieldProblem] = Field(default_factory=list)
+
+
+def error_response(description: str) -> OpenAPIResponse:
+    return {"description": description, "content": {"application/json": {"model": ErrorBody}}}
+
+
+def json_response(description: str, model: type[BaseModel]) -> OpenAPIResponse:
+    return {"description": description, "content": {"application/json": {"model": model}}}
+
+
+PAGE_RESPONSE: OpenAPIResponse = {
+    "description": "The web page.",
+    "content": {"text/html": {"schema": {"type": "string"}}},
+}
+BAD_PATH = "A bad board id or racer alias (too long)."
+UNREADABLE = (" Or a body that cannot be read as its headers say (`UnreadableBody`): a "
+              "Content-Length that is not its length, base64 that does not decode, text that "
+              "is not UTF-8.")
+UNSIGNED = ("Not signed with SigV4 by an identity allowed to invoke the route (API Gateway's own "
+            "answer, without an `error` name); on `drboard serve`, a request from another "
+            "computer than the one serving (`NotAuthorized`).")
+
+
+def json_answer(status: int, body: BaseModel) -> Response[Any]:
+    return Response(status_code=status, content_type=content_types.APPLICATION_JSON, body=body)
+
+
+def page_answer(html: str, status: int = HTTPStatus.OK,
+                headers: dict[str, str] | None = None) -> Response[str]:
+    return Response(status_code=status, content_type=HTML, body=html,
+                    headers=PAGE_HEADERS | (headers or {}))
+
+
+def page_etag(tag: str, limit: int, cursor: str | None) -> str:
+    """The ETag of one page of a board: the board's page tag, the page asked for, and the API's
+    version (a new release may answer differently)."""
+    query = hashlib.sha256(f"{limit}|{cursor or ''}".encode()).hexdigest()[:12]
+    return f'"{api_version()}.{tag}.{query}"'
+
+
+def etag_headers(etag: str) -> dict[str, str]:
+    return {"ETag": etag, "Cache-Control": "no-cache"}
