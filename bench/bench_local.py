@@ -36,6 +36,7 @@ from drboard_assembler.record import EvaluationRun, Lap, Record, SourceFile
 from drboard_functions import ranking
 from drboard_functions.models import Entry, Submission
 from drboard_functions.service import LeaderboardService, _design, racer_key
+from drboard_functions.stores import rank_buckets
 from drboard_functions.stores.sqlite import SqliteStore
 from figures import Report, p50_p95, timed_ms
 
@@ -48,6 +49,7 @@ MODEL = "bench-model"
 PULL_P50_MAX_MS = 10.0
 PULL_SCALING_MAX = 1.5
 PUSH_P50_MAX_MS = 10.0
+RANK_SCALING_MAX = 1.5
 CLI_PULL_P50_MAX_MS = 500.0
 ASSEMBLE_MAX_S = 2.0
 ASSEMBLE_PEAK_MAX_X = 10.0
@@ -207,6 +209,57 @@ def bench_push(report: Report, path: Path, label: str, records: list[Record],
     counts = [timed_ms(lambda k=k: store.count_better(BOARD_ID, k)) for k in keys]
     report.add(f"  of which count_better p50 @ {label}", p50_p95(counts)[0], "ms")
     store.close()
+
+
+def bench_rank(report: Report, path: Path, label: str, reps: int) -> dict[str, float]:
+    """Ranks: a mid-board push's (a 19 s lap; laps are drawn from 8-30 s) and a public read of
+    the last racer's (``racer``, which counts the racer's rank). Rows read are those of the
+    counts the rank adds up, and for comparison the entries the count read before them."""
+    store = SqliteStore(path)
+    service = LeaderboardService(store)
+    rules = store.get_board(BOARD_ID).board.rules
+    middle = _lap_record("bench-rank-middle", [19_000, 19_500, 20_000], 100)
+    last = _lap_record("bench-rank-last", [9_000], 0.5)  # below every seeded racer
+    mid = service.push(middle)
+    view = service.racer(BOARD_ID, last.racer) if service.push(last) else None
+    assert view is not None and view.entry.rank == view.board.participants
+    figures = {}
+    for name, record, rank in (("mid-board push's rank", middle, mid.rank),
+                               ("last racer's rank", last, view.entry.rank)):
+        key = ranking.score_key(ranking.score_record(record, rules))
+        rows, entries = _rows_read(path, key)
+        report.add(f"rows read by the {name} (rank {rank:,}) @ {label}", rows, "rows",
+                   note=f"counts summed; the count before them read {entries:,} entries")
+        samples = [timed_ms(lambda key=key: store.count_better(BOARD_ID, key)) for _ in range(reps)]
+        figures[name] = p50_p95(samples)[0]
+        report.add(f"count_better, {name} p50 @ {label}", figures[name], "ms")
+    samples = [timed_ms(lambda: service.racer(BOARD_ID, last.racer)) for _ in range(reps)]
+    figures["racer view of the last racer"] = p50_p95(samples)[0]
+    report.add(f"racer view of the last racer p50 @ {label}", figures["racer view of the last racer"], "ms")
+    store.close()
+    return figures
+
+
+def _lap_record(racer: str, times: list[int], completion: float) -> Record:
+    laps = [Lap(trial=k + 1, time_ms=ms, completion_pct=completion,
+                status="Lap complete" if completion >= 100 else "Off track")
+            for k, ms in enumerate(times)]
+    run = EvaluationRun.from_laps("metrics/EvaluationMetrics-20220709200242.json", laps)
+    factory = RecordFactory(random.Random(0))
+    return Record.build(track=TRACK, racer=racer, model_name=MODEL, source_layout="drfc",
+                        assembler_version=ASSEMBLER_VERSION, evaluations=[run],
+                        design=factory.design, training=None, provenance=factory.provenance)
+
+
+def _rows_read(path: Path, score_key: str) -> tuple[int, int]:
+    """The count rows a rank of ``score_key`` adds up, and the entries counted before them."""
+    with sqlite3.connect(path) as db:
+        rows = sum(db.execute("SELECT COUNT(*) FROM rank_counts WHERE board_id = ? AND node = ? "
+                              "AND child < ?", (BOARD_ID, node, child)).fetchone()[0]
+                   for node, child in rank_buckets.path(score_key))
+        entries = db.execute("SELECT COUNT(*) FROM entries WHERE board_id = ? AND rank_key < ?",
+                             (BOARD_ID, score_key)).fetchone()[0]
+    return rows, entries
 
 
 # ---- 3: the whole `drboard pull` command --------------------------------------------------------
@@ -448,6 +501,7 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
     small, large = args.sizes
     command = drboard_command(args.drboard)
     pull_p50: dict[int, float] = {}
+    rank_p50: dict[int, dict[str, float]] = {}
 
     if {"push", "pull", "cli"} - set(args.skip):
         for size in (small, large):
@@ -468,10 +522,17 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
                 bench_cli(report, path, label, args.cli_runs, command)
             if "push" not in args.skip:  # last: it adds racers to the board
                 bench_push(report, path, label, pushes, warmup=5)
+                rank_p50[size] = bench_rank(report, path, label, args.pull_reps)
         if small in pull_p50 and large in pull_p50:
             ratio = pull_p50[large] / pull_p50[small]
             report.add(f"pull p50 ratio {label_of(large)} / {label_of(small)}", ratio, "x",
                        limit=PULL_SCALING_MAX)
+
+    if small in rank_p50 and large in rank_p50:
+        for name in rank_p50[small]:
+            ratio = rank_p50[large][name] / rank_p50[small][name]
+            report.add(f"{name} p50 ratio {label_of(large)} / {label_of(small)}", ratio, "x",
+                       limit=RANK_SCALING_MAX)
 
     if "assemble" not in args.skip:
         print(f"assembling a {args.metrics_mb:g} MB run ...", file=sys.stderr, flush=True)
