@@ -14,6 +14,7 @@ import pytest
 from drboard_functions.errors import SubmissionLimitReached, TooSoon
 from drboard_functions.models import BoardSpec
 from drboard_functions.service import LeaderboardService
+from drboard_functions.stores import dynamodb
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
 from moto import mock_aws
 
@@ -253,7 +254,9 @@ def test_a_board_from_before_the_counters_ranks_exactly_and_gets_them_on_its_nex
         assert (reads.queried, reads.got) == (0, 3)  # three counters, no entry
 
 
-def test_counting_a_board_that_changes_meanwhile_keeps_only_a_count_of_one_moment() -> None:
+def test_counting_a_board_that_changes_meanwhile_keeps_only_a_count_of_one_moment(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 0)  # the push below builds nothing
     with mock_aws():
         client = boto3.client("dynamodb", region_name=REGION)
         table = new_table(client)
@@ -263,17 +266,20 @@ def test_counting_a_board_that_changes_meanwhile_keeps_only_a_count_of_one_momen
         real_query = builder._query
 
         def push_during_the_first_scan(request: Any, limit: int | None = None) -> Any:
+            items = real_query(request, limit)
             if request.get("IndexName") == "by_rank" and not scans:
-                scans.append(request)
+                scans.append(request)  # read, not yet counted: now an entry comes
                 LeaderboardService(pusher).push(make_record("Sneaky", [(9_000, 100)]))
-            return real_query(request, limit)
+            return items
 
         builder._query = push_during_the_first_scan  # type: ignore[method-assign]
         generation = builder.build_rank_counters(TRACK)
         assert generation is not None and scans
-        # the push during the first count is in the counters the board took
-        assert ranks_of(DynamoDbStore(table, client)) == listed_ranks(builder)
-        assert ranks_of(builder)["Sneaky"] == 1
+        # the push during the first count is in the counters the board took: the racers it
+        # passed rank one lower
+        ranks = ranks_of(DynamoDbStore(table, client))
+        assert "Sneaky" in ranks and max(ranks.values()) == 51
+        assert ranks == listed_ranks(builder)
 
 
 def test_ranks_stay_exact_under_concurrent_pushes(dynamodb_local: DynamoDbLocal,
@@ -324,3 +330,20 @@ def test_a_rank_on_a_big_board_reads_three_counters(dynamodb_local: DynamoDbLoca
         better = store.count_better(TRACK, entry.score_key)
         assert better == sum(other.score_key < entry.score_key for other in everything)
         assert (reads.queried, reads.got) == (0, 3)
+
+
+def test_a_push_leaves_a_big_board_from_before_the_counters_to_an_explicit_build(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 100)
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        table = new_table(client)
+        seed_board(client, table, 150)
+        store = DynamoDbStore(table, client)
+        receipt = LeaderboardService(store).push(make_record("Newcomer", [(19_000, 100)]))
+        assert receipt.rank == listed_ranks(store)["Newcomer"]  # counted from the entries
+        assert ranks_of(store) == listed_ranks(store)
+        assert store.build_rank_counters(TRACK, max_racers=100) is None
+        assert store.build_rank_counters(TRACK) is not None
+        LeaderboardService(store).push(make_record("Latecomer", [(8_500, 100)]))
+        assert ranks_of(store) == listed_ranks(store)

@@ -24,8 +24,9 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
   entry moves them in its transaction, on condition that the generation is still the board's,
   so they never drift. A rank reads the three items of its path (TransactGetItems: one moment
   of the board), whatever the board's size. A board created before the counters has no
-  generation: its ranks are counted from the entries, as they were, until its next push builds
-  the counters (``build_rank_counters``).
+  generation: its ranks are counted from the entries, as they were, until its counters are
+  built (``build_rank_counters``: by its next push if it has at most 10,000 racers, else once
+  by an operator).
 
 Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
 holds an alias's claim and ``P#<principal>`` the same claim by its sign-in, written together in
@@ -100,6 +101,10 @@ FIRST_GENERATION = "0"  # the rank counters of a board created with them
 COUNT_PREFIX = "c:"
 BUILD_ATTEMPTS = 3  # of counting a board from before the rank counters, while it changes
 READ_ATTEMPTS = 3  # of reading a rank's counters together, while pushes move them
+# A push to a board from before the rank counters counts its entries to build them when it has
+# at most this many racers (about as many items as one rank used to read); a bigger board needs
+# one build_rank_counters call outside a push, which may take longer than a push function may.
+LAZY_BUILD_MAX_RACERS = 10_000
 MAX_ATTEMPTS = 10  # of a push that loses a race with another push of the same racer or board
 BACKOFF_S = 0.01
 MAX_BACKOFF_S = 0.5
@@ -269,7 +274,7 @@ class DynamoDbStore:
         board_at = len(stored) + 1
         exists, generation = self._board_generation(board_id)
         if exists and generation is None:
-            generation = self.build_rank_counters(board_id)
+            generation = self.build_rank_counters(board_id, max_racers=LAZY_BUILD_MAX_RACERS)
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 _backoff(attempt)
@@ -463,13 +468,14 @@ class DynamoDbStore:
         self._generations[board_id] = item["rank_generation"]["S"]
         return True, self._generations[board_id]
 
-    def build_rank_counters(self, board_id: str) -> str | None:
+    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
         """Give a board from before the rank counters its counters, counted from its entries
         (once: this reads every entry), and return their generation; None when the board does
-        not exist or kept changing while it was counted (its ranks are then still counted from
-        the entries, and the next push tries again). Safe alongside pushes: the counters are
-        written under a new generation, which becomes the board's only if no entry changed
-        (the board's version did not move) since the entries were read."""
+        not exist, has more than ``max_racers`` racers, or kept changing while it was counted
+        (its ranks are then still counted from the entries, and the next push tries again).
+        Safe alongside pushes: the counters are written under a new generation, which becomes
+        the board's only if no entry changed (the board's version did not move) since the
+        entries were read."""
         for _ in range(BUILD_ATTEMPTS):
             item = self._get(board_id, BOARD_SK)
             if item is None:
@@ -477,6 +483,8 @@ class DynamoDbStore:
             if "rank_generation" in item:
                 self._generations[board_id] = item["rank_generation"]["S"]
                 return self._generations[board_id]
+            if max_racers is not None and int(item["participants"]["N"]) > max_racers:
+                return None
             version = item.get("board_version", {"N": "0"})["N"]
             score_keys = [entry["score_key"]["S"] for entry in self._query({
                 "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
