@@ -7,6 +7,7 @@ measures, and prints one table of figures with their targets (PASS/FAIL). See be
     python bench/bench_dynamodb.py            # boards of 1,000 and 100,000 racers
     python bench/bench_dynamodb.py --quick    # boards of 1,000 and 10,000 racers
     python bench/bench_dynamodb.py --only-ranks  # ranks and contention, without the page figures
+    python bench/bench_dynamodb.py --only-contention  # 16 threads pushing to one board
 
 Standard library, drboard and its dependencies (boto3), and the repository's test helpers
 (tests/tablekit.py builds the table from template.yaml, so aws-sam-translator is needed:
@@ -38,7 +39,6 @@ from drboard_functions.service import LeaderboardService, racer_key  # noqa: E40
 from drboard_functions.stores.dynamodb import (  # noqa: E402
     RANK_INDEX,
     DynamoDbStore,
-    StoreContention,
     board_item,
     entry_item,
 )
@@ -191,6 +191,9 @@ def interleaved(probes: list[Probe], call: Callable[[Probe], None], reps: int) -
 
 
 def run(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None:
+    if args.only_contention:
+        bench_contention(report, server, args)
+        return
     probes = []
     for size in args.sizes:
         print(f"seeding {size:,} racers ...", file=sys.stderr, flush=True)
@@ -308,7 +311,7 @@ class NoCounters(DynamoDbStore):
     """The store as it was before the rank counters: pushes move no counter, ranks count the
     better entries (on a board without counters)."""
 
-    def build_rank_counters(self, board_id: str) -> str | None:
+    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
         return None
 
 
@@ -321,7 +324,7 @@ def bench_contention(report: Report, server: DynamoDbLocal, args: argparse.Names
                    run.pushes_per_s, "pushes/s",
                    ok=(run.exact and not run.gave_up) if store_type is DynamoDbStore else None,
                    note=f"{run.cancelled} of {run.transactions} push transactions cancelled "
-                        f"(conflicts) and retried; {run.gave_up} pushes gave up; ranks exact "
+                        f"(conflicts) and retried; {run.gave_up} pushes failed; ranks exact "
                         f"afterwards: {run.exact}")
 
 
@@ -356,7 +359,7 @@ def contend(server: DynamoDbLocal, store_type: type[DynamoDbStore], args: argpar
     work = [[make_record(f"{board_id} {t:02d}", [(11_000 + rng.choice([0, 4, 9, 500]) - k * 3, 100)],
                          model=f"m{k}") for k in range(args.pushes_each)] for t in range(args.pushers)]
     barrier = threading.Barrier(args.pushers)
-    gave_up: list[StoreContention] = []
+    gave_up: list[Exception] = []
 
     def push(t: int) -> None:
         service = LeaderboardService(stores[t])
@@ -364,7 +367,7 @@ def contend(server: DynamoDbLocal, store_type: type[DynamoDbStore], args: argpar
         for record in work[t]:
             try:
                 service.push(record, board_id)
-            except StoreContention as error:
+            except Exception as error:  # StoreContention (gave up retrying) above all
                 gave_up.append(error)
 
     threads = [threading.Thread(target=push, args=(t,)) for t in range(args.pushers)]
@@ -394,6 +397,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--pushers", type=int, default=16, help="threads pushing at once (16)")
     parser.add_argument("--pushes-each", type=int, default=10, help="pushes per thread (10)")
     parser.add_argument("--only-ranks", action="store_true", help="ranks and contention only")
+    parser.add_argument("--only-contention", action="store_true", help="pushes contending only")
     parser.add_argument("--threads", type=int, default=8, help="seeding threads (8)")
     parser.add_argument("--seed", type=int, default=20250301)
     parser.add_argument("--json", type=Path, help="also save the figures here")

@@ -212,41 +212,54 @@ def bench_push(report: Report, path: Path, label: str, records: list[Record],
     store.close()
 
 
-def bench_rank(report: Report, path: Path, label: str, reps: int) -> dict[str, float]:
-    """Ranks: a mid-board push's (a 19 s lap; laps are drawn from 8-30 s) and a public read of
-    the last racer's (``racer``, which counts the racer's rank). Rows read are those of the
-    counts the rank adds up, and for comparison the entries the count read before them."""
-    store = SqliteStore(path)
-    service = LeaderboardService(store)
-    rules = store.get_board(BOARD_ID).board.rules
+def bench_rank(report: Report, boards: dict[str, Path], reps: int) -> None:
+    """Ranks on each board (label -> file): a mid-board push's (a 19 s lap; laps are drawn from
+    8-30 s) and the last racer's, which a public read of them (``racer``) counts. Rows read are
+    those of the counts a rank adds up; for comparison, the entries the count read before them.
+    Timed alternately on the boards, so that drift (other load on the machine) falls on each."""
     middle = _lap_record("bench-rank-middle", [19_000, 19_500, 20_000], 100)
     last = _lap_record("bench-rank-last", [9_000], 0.5)  # below every seeded racer
-    mid = service.push(middle)
-    view = service.racer(BOARD_ID, last.racer) if service.push(last) else None
-    assert view is not None and view.entry.rank == view.board.participants
-    figures = {}
-    for name, record, rank in (("mid-board push's rank", middle, mid.rank),
-                               ("last racer's rank", last, view.entry.rank)):
-        key = ranking.score_key(ranking.score_record(record, rules))
-        rows, entries = _rows_read(path, key)
-        report.add(f"rows read by the {name} (rank {rank:,}) @ {label}", rows, "rows",
-                   note=f"counts summed; the count before them read {entries:,} entries")
-        figures[name] = _per_call_p50(lambda key=key: store.count_better(BOARD_ID, key), reps)
-        report.add(f"count_better, {name} p50 @ {label}", figures[name], "ms")
-    samples = [timed_ms(lambda: service.racer(BOARD_ID, last.racer)) for _ in range(reps)]
-    figures["racer view of the last racer"] = p50_p95(samples)[0]
-    report.add(f"racer view of the last racer p50 @ {label}", figures["racer view of the last racer"], "ms")
-    store.close()
-    return figures
+    stores = {label: SqliteStore(path) for label, path in boards.items()}
+    calls: dict[str, list[Callable[[], object]]] = {name: [] for name in (
+        "mid-board push's rank", "last racer's rank", "racer view of the last racer")}
+    for label, store in stores.items():
+        service = LeaderboardService(store)
+        rules = store.get_board(BOARD_ID).board.rules
+        mid = service.push(middle)
+        service.push(last)
+        view = service.racer(BOARD_ID, last.racer)
+        assert view.entry.rank == view.board.participants
+        for name, record, rank in (("mid-board push's rank", middle, mid.rank),
+                                   ("last racer's rank", last, view.entry.rank)):
+            key = ranking.score_key(ranking.score_record(record, rules))
+            rows, entries = _rows_read(boards[label], key)
+            report.add(f"rows read by the {name} (rank {rank:,}) @ {label}", rows, "rows",
+                       note=f"counts summed; the count before them read {entries:,} entries")
+            calls[name].append(lambda store=store, key=key: store.count_better(BOARD_ID, key))
+        calls["racer view of the last racer"].append(
+            lambda service=service: service.racer(BOARD_ID, last.racer))
+    for name, per_board in calls.items():
+        batch = 1 if name.startswith("racer view") else 100  # a rank takes microseconds
+        samples: list[list[float]] = [[] for _ in per_board]
+        for _ in range(reps):
+            for index, call in enumerate(per_board):
+                samples[index].append(_timed_batch(call, batch))
+        p50s = [p50_p95(timings)[0] for timings in samples]
+        for label, p50 in zip(boards, p50s, strict=True):
+            report.add(f"{name} p50 @ {label}", p50, "ms")
+        small, large = boards
+        report.add(f"{name} p50 ratio {large} / {small}", p50s[1] / p50s[0], "x",
+                   limit=RANK_SCALING_MAX)
+    for store in stores.values():
+        store.close()
 
 
-def _per_call_p50(call: Callable[[], object], reps: int, batch: int = 100) -> float:
-    """The median of ``reps`` timings of ``batch`` calls, per call: a rank takes microseconds,
-    about what timing one call costs."""
+def _timed_batch(call: Callable[[], object], batch: int) -> float:
+    """Milliseconds per call, over ``batch`` calls."""
     def calls() -> None:
         for _ in range(batch):
             call()
-    return p50_p95([timed_ms(calls) / batch for _ in range(reps)])[0]
+    return timed_ms(calls) / batch
 
 
 def _lap_record(racer: str, times: list[int], completion: float) -> Record:
@@ -510,7 +523,7 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
     small, large = args.sizes
     command = drboard_command(args.drboard)
     pull_p50: dict[int, float] = {}
-    rank_p50: dict[int, dict[str, float]] = {}
+    ranked: dict[str, Path] = {}
 
     if {"push", "pull", "cli"} - set(args.skip):
         for size in (small, large):
@@ -531,17 +544,14 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
                 bench_cli(report, path, label, args.cli_runs, command)
             if "push" not in args.skip:  # last: it adds racers to the board
                 bench_push(report, path, label, pushes, warmup=5)
-                rank_p50[size] = bench_rank(report, path, label, args.pull_reps)
+                ranked[label] = path
         if small in pull_p50 and large in pull_p50:
             ratio = pull_p50[large] / pull_p50[small]
             report.add(f"pull p50 ratio {label_of(large)} / {label_of(small)}", ratio, "x",
                        limit=PULL_SCALING_MAX)
 
-    if small in rank_p50 and large in rank_p50:
-        for name in rank_p50[small]:
-            ratio = rank_p50[large][name] / rank_p50[small][name]
-            report.add(f"{name} p50 ratio {label_of(large)} / {label_of(small)}", ratio, "x",
-                       limit=RANK_SCALING_MAX)
+    if len(ranked) == 2:
+        bench_rank(report, ranked, args.pull_reps)
 
     if "assemble" not in args.skip:
         print(f"assembling a {args.metrics_mb:g} MB run ...", file=sys.stderr, flush=True)
