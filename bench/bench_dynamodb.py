@@ -6,6 +6,8 @@ measures, and prints one table of figures with their targets (PASS/FAIL). See be
 
     python bench/bench_dynamodb.py            # boards of 1,000 and 100,000 racers
     python bench/bench_dynamodb.py --quick    # boards of 1,000 and 10,000 racers
+    python bench/bench_dynamodb.py --only-ranks  # ranks and contention, without the page figures
+    python bench/bench_dynamodb.py --only-contention  # 16 threads pushing to one board
 
 Standard library, drboard and its dependencies (boto3), and the repository's test helpers
 (tests/tablekit.py builds the table from template.yaml, so aws-sam-translator is needed:
@@ -18,6 +20,7 @@ import argparse
 import os
 import platform
 import random
+import statistics
 import sys
 import threading
 import time
@@ -25,7 +28,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the tests package: DynamoDB Local and the table from the template
@@ -33,9 +36,15 @@ sys.path.insert(0, str(ROOT))  # the tests package: DynamoDB Local and the table
 from drboard_functions import ranking  # noqa: E402
 from drboard_functions.models import Board, Design, Entry, Score  # noqa: E402
 from drboard_functions.service import LeaderboardService, racer_key  # noqa: E402
-from drboard_functions.stores.dynamodb import RANK_INDEX, DynamoDbStore, board_item, entry_item  # noqa: E402
+from drboard_functions.stores.dynamodb import (  # noqa: E402
+    RANK_INDEX,
+    DynamoDbStore,
+    board_item,
+    entry_item,
+)
 
 from tests.integration.dynamodb_local import DynamoDbLocal  # noqa: E402
+from tests.recordkit import make_record  # noqa: E402
 from tests.tablekit import create_board_table  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "bench"))
@@ -49,6 +58,8 @@ PAGE = 100
 
 ITEMS_READ_MAX_OVER = 1  # items read by a top-100 may exceed 100 by this much
 PULL_SCALING_MAX = 1.5
+RANK_ITEMS_MAX = 3  # items a rank reads once the board has its counters
+RANK_SCALING_MAX = 1.5
 
 # ---- figures (the same table as bench_local.py) -------------------------------------------------
 
@@ -80,7 +91,8 @@ def make_entry(board_id: str, n: int, rng: random.Random) -> Entry:
 
 def seed_board(server: DynamoDbLocal, board_id: str, racers: int, threads: int, seed: int) -> float:
     """The board item and ``racers`` entry items, written directly: BatchWriteItem, 25 items a
-    call, from ``threads`` threads with a client each. Returns the seconds taken."""
+    call, from ``threads`` threads with a client each (a board as before the rank counters).
+    Returns the seconds taken."""
     start = time.perf_counter()
     rng = random.Random(seed)
     board = Board(board_id=board_id, track=TRACK, title=f"Bench board of {racers:,}", created_at=T0)
@@ -109,9 +121,17 @@ class Probe:
 
     def __init__(self, server: DynamoDbLocal, size: int) -> None:
         self.size, self.label, self.board_id = size, f"{size:,} racers", f"bench_{size}"
+        self.last_racer = f"Last Racer {size}"  # pushed below every seeded racer
+        self.last_key = ""  # their score key, once pushed
+        self.pushes: list[Any] = []  # records of mid-board racers, pushed one by one
+        self.push_reads: list[int] = []
+        self.places: list[float] = []
         self.client = server.client()
         self.scanned: list[int] = []
+        self.got = 0  # items read by GetItem and TransactGetItems
         self.client.meta.events.register("after-call.dynamodb.Query", self._count)
+        self.client.meta.events.register("after-call.dynamodb.GetItem", self._count_got)
+        self.client.meta.events.register("after-call.dynamodb.TransactGetItems", self._count_got)
         self.store = DynamoDbStore(TABLE, self.client)
         self.service = LeaderboardService(self.store)
         self.bare_request: dict[str, Any] = {
@@ -122,6 +142,33 @@ class Probe:
 
     def _count(self, parsed: dict[str, Any], **_: Any) -> None:
         self.scanned.append(int(parsed.get("ScannedCount", 0)))
+
+    def _count_got(self, parsed: dict[str, Any], **_: Any) -> None:
+        self.got += len(parsed["Responses"]) if "Responses" in parsed else int("Item" in parsed)
+
+    def rank(self) -> None:
+        self.store.count_better(self.board_id, MIDDLE)
+
+    def last_rank(self) -> None:
+        self.store.count_better(self.board_id, self.last_key)
+
+    def racer_view(self) -> None:
+        self.service.racer(self.board_id, self.last_racer)
+
+    def push_next(self) -> None:
+        """Push the next of ``pushes``; keep the items it read and where it ranked."""
+        receipts: list[Any] = []
+        reads = self.items_read(lambda: receipts.append(
+            self.service.push(self.pushes.pop(0), self.board_id)))
+        self.push_reads.append(sum(reads))
+        self.places.append(receipts[0].rank / receipts[0].participants)
+
+    def items_read(self, call: Callable[[], Any]) -> tuple[int, int]:
+        """Items read by one call: (by Query, by GetItem and TransactGetItems)."""
+        self.scanned.clear()
+        self.got = 0
+        call()
+        return sum(self.scanned), self.got
 
     def page(self) -> None:
         self.service.board_page(self.board_id, limit=PAGE)
@@ -144,12 +191,20 @@ def interleaved(probes: list[Probe], call: Callable[[Probe], None], reps: int) -
 
 
 def run(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None:
+    if args.only_contention:
+        bench_contention(report, server, args)
+        return
+    probes = []
     for size in args.sizes:
         print(f"seeding {size:,} racers ...", file=sys.stderr, flush=True)
         seconds = seed_board(server, f"bench_{size}", size, args.threads, args.seed + size)
         report.add(f"seed {size:,} racers (BatchWriteItem, {args.threads} threads)", seconds, "s",
                    note=f"{size / seconds:,.0f} entries/s")
-    probes = [Probe(server, size) for size in args.sizes]
+        probes.append(Probe(server, size))
+    bench_ranks(report, probes, args)
+    bench_contention(report, server, args)
+    if args.only_ranks:
+        return
 
     for probe in probes:
         probe.scanned.clear()
@@ -182,18 +237,153 @@ def run(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None
                ok=ratio <= PULL_SCALING_MAX, target=f"<= {PULL_SCALING_MAX:.2f} x")
     report.add(f"bare Query p50 ratio {large:,} / {small:,} racers", bare_p50s[1] / bare_p50s[0], "x")
 
-    # No target: the rank count a push runs (count_better) reads every better entry, so its cost
-    # grows with the racer's rank. A best lap of 19 s lands mid-board (laps are drawn from 8-30 s).
-    middle = ranking.score_key(Score(qualified=True, time_ms=19_000, best_completion_pct=100.0,
-                                     laps_completed=3, best_lap_ms=19_000, run="x"))
+
+
+# A best lap of 19 s lands mid-board (laps are drawn from 8-30 s).
+MIDDLE = ranking.score_key(Score(qualified=True, time_ms=19_000, best_completion_pct=100.0,
+                                 laps_completed=3, best_lap_ms=19_000, run="x"))
+
+
+def bench_ranks(report: Report, probes: list[Probe], args: argparse.Namespace) -> None:
+    """Ranks on boards seeded as before the counters: one count from the entries (what every
+    rank cost before), the one-time build of the counters, then ranks from the counters."""
     for probe in probes:
-        probe.scanned.clear()
-        counts = [timed_ms(lambda probe=probe: probe.store.count_better(probe.board_id, middle))
-                  for _ in range(args.count_reps)]
-        per_count = sum(probe.scanned) // args.count_reps
-        report.add(f"count_better (a mid-board push's rank) p50 @ {probe.label}", p50_p95(counts)[0],
-                   "ms", note=f"{per_count:,} items read per count, in "
-                              f"{len(probe.scanned) // args.count_reps} Query page(s)")
+        start = time.perf_counter()
+        queried, _ = probe.items_read(lambda probe=probe: probe.store.count_better(probe.board_id, MIDDLE))
+        report.add(f"count_better mid-board, counted from the entries @ {probe.label}",
+                   (time.perf_counter() - start) * 1000, "ms",
+                   note=f"{queried:,} items read (a board before the counters; before them, every board)")
+        start = time.perf_counter()
+        assert probe.store.build_rank_counters(probe.board_id) is not None
+        report.add(f"build_rank_counters (once per board from before them) @ {probe.label}",
+                   time.perf_counter() - start, "s")
+        # Seeded racers have entries only; the last racer (0.5 % done) is pushed, record and all.
+        probe.service.push(make_record(probe.last_racer, [(9_000, 0.5)]), probe.board_id)
+        last = probe.store.get_entry(probe.board_id, racer_key(probe.last_racer))
+        assert last is not None
+        probe.last_key = last.score_key
+
+    for probe in probes:
+        probe.pushes = [make_record(f"Mid Pusher {probe.size} {n:03d}", [(19_000 + n, 100)])
+                        for n in range(args.pushes)]
+        rank_reads = probe.items_read(probe.rank)
+        last_reads = probe.items_read(probe.last_rank)
+        racer_reads = probe.items_read(probe.racer_view)
+        view = probe.service.racer(probe.board_id, probe.last_racer)
+        assert view.entry.rank == view.board.participants  # below every seeded racer
+        report.add(f"items read by a mid-board rank (count_better) @ {probe.label}", sum(rank_reads),
+                   "items", ok=sum(rank_reads) <= RANK_ITEMS_MAX, target=f"<= {RANK_ITEMS_MAX}",
+                   note=f"{rank_reads[0]} by Query, {rank_reads[1]} by GetItem/TransactGetItems")
+        report.add(f"items read by the last racer's rank (count_better) @ {probe.label}",
+                   sum(last_reads), "items", ok=sum(last_reads) <= RANK_ITEMS_MAX,
+                   target=f"<= {RANK_ITEMS_MAX}")
+        report.add(f"items read by a racer view of the last racer (rank {view.entry.rank:,}) @ "
+                   f"{probe.label}", sum(racer_reads), "items",
+                   note="the whole view: board, entry, record, history, leader and the rank")
+    interleaved(probes, Probe.rank, args.count_reps)  # warm-up
+    timed = {"rank": interleaved(probes, Probe.rank, args.count_reps),
+             "last": interleaved(probes, Probe.last_rank, args.count_reps),
+             "racer": interleaved(probes, Probe.racer_view, args.count_reps),
+             "push": interleaved(probes, Probe.push_next, args.pushes)}
+    figures = {name: [p50_p95(samples)[0] for samples in per_probe] for name, per_probe in timed.items()}
+    for index, probe in enumerate(probes):
+        report.add(f"count_better mid-board p50 @ {probe.label}", figures["rank"][index], "ms")
+        report.add(f"count_better of the last racer p50 @ {probe.label}", figures["last"][index], "ms")
+        report.add(f"racer view of the last racer p50 @ {probe.label}", figures["racer"][index], "ms",
+                   note="the rank and the view's other reads (history, record, leader, board)")
+        report.add(f"push of a new mid-board racer p50 @ {probe.label}", figures["push"][index], "ms",
+                   note=f"{args.pushes} pushes; {max(probe.push_reads)} items read at most per push, "
+                        f"the rank in its receipt included; ranked at "
+                        f"{statistics.median(probe.places):.0%} of the board")
+    (small, large) = args.sizes
+    for name, label in (("rank", "count_better mid-board"), ("last", "count_better of the last racer"),
+                        ("push", "push of a mid-board racer"), ("racer", "racer view of the last racer")):
+        ratio = figures[name][1] / figures[name][0]
+        # The racer view's own reads (its history Query above all) take longer on DynamoDB
+        # Local's bigger partition, for the same items read: a figure, not a target.
+        checked = name != "racer"
+        report.add(f"{label} p50 ratio {large:,} / {small:,} racers", ratio, "x",
+                   ok=ratio <= RANK_SCALING_MAX if checked else None,
+                   target=f"<= {RANK_SCALING_MAX:.2f} x" if checked else "")
+
+
+class NoCounters(DynamoDbStore):
+    """The store as it was before the rank counters: pushes move no counter, ranks count the
+    better entries (on a board without counters)."""
+
+    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
+        return None
+
+
+def bench_contention(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None:
+    """``--pushers`` threads, a client each, push at once to one new board: each a new racer,
+    then improvements in the same few buckets. With the counters, and as before them."""
+    for name, store_type in (("with rank counters", DynamoDbStore), ("without (as before)", NoCounters)):
+        run = contend(server, store_type, args)
+        report.add(f"{args.pushers} threads x {args.pushes_each} pushes to one board, {name}",
+                   run.pushes_per_s, "pushes/s",
+                   ok=(run.exact and not run.gave_up) if store_type is DynamoDbStore else None,
+                   note=f"{run.cancelled} of {run.transactions} push transactions cancelled "
+                        f"(conflicts) and retried; {run.gave_up} pushes failed; ranks exact "
+                        f"afterwards: {run.exact}")
+
+
+class Contention(NamedTuple):
+    pushes_per_s: float
+    transactions: int
+    cancelled: int
+    gave_up: int
+    exact: bool
+
+
+def contend(server: DynamoDbLocal, store_type: type[DynamoDbStore], args: argparse.Namespace) -> Contention:
+    board_id = f"contention_{store_type.__name__}"
+    client = server.client()
+    board = Board(board_id=board_id, track=TRACK, title="Contention", created_at=T0)
+    if store_type is DynamoDbStore:
+        DynamoDbStore(TABLE, client).create_board(board)
+    else:
+        client.put_item(TableName=TABLE, Item=board_item(board))
+    stores = [store_type(TABLE, server.client()) for _ in range(args.pushers)]
+    counts = {"transactions": 0, "cancelled": 0}
+    lock = threading.Lock()
+
+    def count(parsed: dict[str, Any], **_: Any) -> None:
+        with lock:
+            counts["transactions"] += 1
+            counts["cancelled"] += parsed.get("Error", {}).get("Code") == "TransactionCanceledException"
+
+    for store in stores:
+        store.client.meta.events.register("after-call.dynamodb.TransactWriteItems", count)
+    rng = random.Random(args.seed)
+    work = [[make_record(f"{board_id} {t:02d}", [(11_000 + rng.choice([0, 4, 9, 500]) - k * 3, 100)],
+                         model=f"m{k}") for k in range(args.pushes_each)] for t in range(args.pushers)]
+    barrier = threading.Barrier(args.pushers)
+    gave_up: list[Exception] = []
+
+    def push(t: int) -> None:
+        service = LeaderboardService(stores[t])
+        barrier.wait(timeout=60)
+        for record in work[t]:
+            try:
+                service.push(record, board_id)
+            except Exception as error:  # StoreContention (gave up retrying) above all
+                gave_up.append(error)
+
+    threads = [threading.Thread(target=push, args=(t,)) for t in range(args.pushers)]
+    start = time.perf_counter()
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    seconds = time.perf_counter() - start
+    check = DynamoDbStore(TABLE, server.client())
+    entries = check.top(board_id, 1000)
+    exact = len(entries) == args.pushers and all(
+        check.count_better(board_id, e.score_key) == sum(o.score_key < e.score_key for o in entries)
+        for e in entries)
+    return Contention(args.pushers * args.pushes_each / seconds, counts["transactions"],
+                      counts["cancelled"], len(gave_up), exact)
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -202,7 +392,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--sizes", type=int, nargs=2, metavar=("SMALL", "LARGE"))
     parser.add_argument("--reps", type=int, default=200, help="timed calls per figure (200)")
     parser.add_argument("--warmup", type=int, default=100, help="untimed pages per size first (100)")
-    parser.add_argument("--count-reps", type=int, default=5)
+    parser.add_argument("--count-reps", type=int, default=50, help="timed ranks and racer views (50)")
+    parser.add_argument("--pushes", type=int, default=30, help="timed mid-board pushes per size (30)")
+    parser.add_argument("--pushers", type=int, default=16, help="threads pushing at once (16)")
+    parser.add_argument("--pushes-each", type=int, default=10, help="pushes per thread (10)")
+    parser.add_argument("--only-ranks", action="store_true", help="ranks and contention only")
+    parser.add_argument("--only-contention", action="store_true", help="pushes contending only")
     parser.add_argument("--threads", type=int, default=8, help="seeding threads (8)")
     parser.add_argument("--seed", type=int, default=20250301)
     parser.add_argument("--json", type=Path, help="also save the figures here")

@@ -27,6 +27,7 @@ import sys
 import tempfile
 import textwrap
 import time
+from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -36,6 +37,7 @@ from drboard_assembler.record import EvaluationRun, Lap, Record, SourceFile
 from drboard_functions import ranking
 from drboard_functions.models import Entry, Submission
 from drboard_functions.service import LeaderboardService, racer_key
+from drboard_functions.stores import rank_buckets
 from drboard_functions.stores.sqlite import SqliteStore
 from drboard_functions.views import design_of
 from figures import Report, p50_p95, timed_ms
@@ -49,6 +51,7 @@ MODEL = "bench-model"
 PULL_P50_MAX_MS = 10.0
 PULL_SCALING_MAX = 1.5
 PUSH_P50_MAX_MS = 10.0
+RANK_SCALING_MAX = 1.5
 CLI_PULL_P50_MAX_MS = 500.0
 ASSEMBLE_MAX_S = 2.0
 ASSEMBLE_PEAK_MAX_X = 10.0
@@ -208,6 +211,78 @@ def bench_push(report: Report, path: Path, label: str, records: list[Record],
     counts = [timed_ms(lambda k=k: store.count_better(BOARD_ID, k)) for k in keys]
     report.add(f"  of which count_better p50 @ {label}", p50_p95(counts)[0], "ms")
     store.close()
+
+
+def bench_rank(report: Report, boards: dict[str, Path], reps: int) -> None:
+    """Ranks on each board (label -> file): a mid-board push's (a 19 s lap; laps are drawn from
+    8-30 s) and the last racer's, which a public read of them (``racer``) counts. Rows read are
+    those of the counts a rank adds up; for comparison, the entries the count read before them.
+    Timed alternately on the boards, so that drift (other load on the machine) falls on each."""
+    middle = _lap_record("bench-rank-middle", [19_000, 19_500, 20_000], 100)
+    last = _lap_record("bench-rank-last", [9_000], 0.5)  # below every seeded racer
+    stores = {label: SqliteStore(path) for label, path in boards.items()}
+    calls: dict[str, list[Callable[[], object]]] = {name: [] for name in (
+        "mid-board push's rank", "last racer's rank", "racer view of the last racer")}
+    for label, store in stores.items():
+        service = LeaderboardService(store)
+        rules = store.get_board(BOARD_ID).board.rules
+        mid = service.push(middle)
+        service.push(last)
+        view = service.racer(BOARD_ID, last.racer)
+        assert view.entry.rank == view.board.participants
+        for name, record, rank in (("mid-board push's rank", middle, mid.rank),
+                                   ("last racer's rank", last, view.entry.rank)):
+            key = ranking.score_key(ranking.score_record(record, rules))
+            rows, entries = _rows_read(boards[label], key)
+            report.add(f"rows read by the {name} (rank {rank:,}) @ {label}", rows, "rows",
+                       note=f"counts summed; the count before them read {entries:,} entries")
+            calls[name].append(lambda store=store, key=key: store.count_better(BOARD_ID, key))
+        calls["racer view of the last racer"].append(
+            lambda service=service: service.racer(BOARD_ID, last.racer))
+    for name, per_board in calls.items():
+        batch = 1 if name.startswith("racer view") else 100  # a rank takes microseconds
+        samples: list[list[float]] = [[] for _ in per_board]
+        for _ in range(reps):
+            for index, call in enumerate(per_board):
+                samples[index].append(_timed_batch(call, batch))
+        p50s = [p50_p95(timings)[0] for timings in samples]
+        for label, p50 in zip(boards, p50s, strict=True):
+            report.add(f"{name} p50 @ {label}", p50, "ms")
+        small, large = boards
+        report.add(f"{name} p50 ratio {large} / {small}", p50s[1] / p50s[0], "x",
+                   limit=RANK_SCALING_MAX)
+    for store in stores.values():
+        store.close()
+
+
+def _timed_batch(call: Callable[[], object], batch: int) -> float:
+    """Milliseconds per call, over ``batch`` calls."""
+    def calls() -> None:
+        for _ in range(batch):
+            call()
+    return timed_ms(calls) / batch
+
+
+def _lap_record(racer: str, times: list[int], completion: float) -> Record:
+    laps = [Lap(trial=k + 1, time_ms=ms, completion_pct=completion,
+                status="Lap complete" if completion >= 100 else "Off track")
+            for k, ms in enumerate(times)]
+    run = EvaluationRun.from_laps("metrics/EvaluationMetrics-20220709200242.json", laps)
+    factory = RecordFactory(random.Random(0))
+    return Record.build(track=TRACK, racer=racer, model_name=MODEL, source_layout="drfc",
+                        assembler_version=ASSEMBLER_VERSION, evaluations=[run],
+                        design=factory.design, training=None, provenance=factory.provenance)
+
+
+def _rows_read(path: Path, score_key: str) -> tuple[int, int]:
+    """The count rows a rank of ``score_key`` adds up, and the entries counted before them."""
+    with sqlite3.connect(path) as db:
+        rows = sum(db.execute("SELECT COUNT(*) FROM rank_counts WHERE board_id = ? AND node = ? "
+                              "AND child < ?", (BOARD_ID, node, child)).fetchone()[0]
+                   for node, child in rank_buckets.path(score_key))
+        entries = db.execute("SELECT COUNT(*) FROM entries WHERE board_id = ? AND rank_key < ?",
+                             (BOARD_ID, score_key)).fetchone()[0]
+    return rows, entries
 
 
 # ---- 3: the whole `drboard pull` command --------------------------------------------------------
@@ -486,6 +561,7 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
     small, large = args.sizes
     command = drboard_command(args.drboard)
     pull_p50: dict[int, float] = {}
+    ranked: dict[str, Path] = {}
 
     if {"push", "pull", "cli", "export"} - set(args.skip):
         for size in (small, large):
@@ -508,10 +584,14 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
                 bench_export(report, path, workdir, label)
             if "push" not in args.skip:  # last: it adds racers to the board
                 bench_push(report, path, label, pushes, warmup=5)
+                ranked[label] = path
         if small in pull_p50 and large in pull_p50:
             ratio = pull_p50[large] / pull_p50[small]
             report.add(f"pull p50 ratio {label_of(large)} / {label_of(small)}", ratio, "x",
                        limit=PULL_SCALING_MAX)
+
+    if len(ranked) == 2:
+        bench_rank(report, ranked, args.pull_reps)
 
     if "assemble" not in args.skip:
         print(f"assembling a {args.metrics_mb:g} MB run ...", file=sys.stderr, flush=True)

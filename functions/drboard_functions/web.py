@@ -126,10 +126,14 @@ LIVE_SCRIPT = """
       for (const [racer, row] of after) {
         const old = before.get(racer);
         if (!old && hadEntries) marks.set("fresh " + racer, now);
-        else if (old && old.dataset.submission !== row.dataset.submission) marks.set("improved " + racer, now);
+        else if (old && old.dataset.submission !== row.dataset.submission) {
+          marks.set("improved " + racer, now);
+        }
       }
       const top = main.querySelector("tr[data-racer]");
-      if (top && leader && top.dataset.racer !== leader.dataset.racer) marks.set("leader " + top.dataset.racer, now);
+      if (top && leader && top.dataset.racer !== leader.dataset.racer) {
+        marks.set("leader " + top.dataset.racer, now);
+      }
       // A mark outlives the refreshes that follow it: its glow goes on where it was.
       for (const [mark, since] of marks) {
         if (now - since >= GLOW_MS) { marks.delete(mark); continue; }

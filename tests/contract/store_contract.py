@@ -107,6 +107,18 @@ def participants(store: BoardStore, board_id: str = TRACK) -> int:
     return stored.participants
 
 
+def ranks_by_count(store: BoardStore, board_id: str = TRACK) -> dict[str, int]:
+    """Every racer's rank as the store counts it: 1 + count_better of their score key."""
+    return {e.racer: store.count_better(board_id, e.score_key) + 1 for e in store.top(board_id, 1000)}
+
+
+def ranks_by_listing(store: BoardStore, board_id: str = TRACK) -> dict[str, int]:
+    """Every racer's rank by the definition, from the whole listing: 1 + the entries with a
+    strictly lower score key."""
+    entries = store.top(board_id, 1000)
+    return {e.racer: 1 + sum(other.score_key < e.score_key for other in entries) for e in entries}
+
+
 class StoreContract:
     """Behaviour every BoardStore adapter shares. Subclasses supply the ``store`` fixture."""
 
@@ -349,6 +361,90 @@ class StoreContract:
         assert store.count_better(TRACK, keys["Bob"][:-1] + "1") == 3
         assert store.count_better(TRACK, "1:10000") == 7  # everyone has more than 0 % completion
         assert store.count_better("nowhere", keys["Dee"]) == 0
+
+    # ---- ranks ----------------------------------------------------------------------------------
+
+    def test_ranks_are_exact_within_one_score_bucket_and_across_buckets(self, store: BoardStore) -> None:
+        specs: Sequence[tuple[str, list[LapSpec]]] = [
+            ("Ada", lap(12_001)), ("Bob", lap(12_003)), ("Cy", lap(12_003)),  # one 10 ms bucket
+            ("Dee", lap(12_009)), ("Eve", lap(12_010)), ("Fay", lap(12_999)),  # one second
+            ("Gus", lap(13_000)), ("Hal", lap(8_000)), ("Ida", lap(30_000)),  # other seconds
+            ("Jo", [(9_000, 80)]), ("Kit", [(9_000, 80)]), ("Lu", [(9_000, 79.99)]),
+            ("Max", [(9_000, 40)]), ("Ned", [(9_000, 0)]),
+        ]
+        for n, (racer, laps) in enumerate(specs):
+            submit(store, make_record(racer, laps), at(n))
+        assert ranks_by_count(store) == {
+            "Hal": 1, "Ada": 2, "Bob": 3, "Cy": 3, "Dee": 5, "Eve": 6, "Fay": 7, "Gus": 8,
+            "Ida": 9, "Jo": 10, "Kit": 10, "Lu": 12, "Max": 13, "Ned": 14}
+        # keys no entry holds, inside the same buckets
+        assert store.count_better(TRACK, "0:000000012002") == 2
+        assert store.count_better(TRACK, "0:000000012004") == 4
+        assert store.count_better(TRACK, "0:000000012998") == 6
+        assert store.count_better(TRACK, "1:02001") == 11
+
+    def test_ranks_follow_an_improvement_past_other_racers(self, store: BoardStore) -> None:
+        for n, (racer, ms) in enumerate([("Ada", 11_000), ("Bob", 11_500), ("Cy", 12_000),
+                                         ("Dee", 14_250)]):
+            submit(store, make_record(racer, lap(ms)), at(n))
+        assert submit(store, make_record("Dee", lap(11_500), model="faster"), at(9)).improved
+        assert ranks_by_count(store) == {"Ada": 1, "Bob": 2, "Dee": 2, "Cy": 4}
+        assert submit(store, make_record("Cy", lap(10_999), model="faster"), at(10)).improved
+        assert ranks_by_count(store) == {"Cy": 1, "Ada": 2, "Bob": 3, "Dee": 3}
+        # a racer who never finished a lap, then qualifies
+        submit(store, make_record("Eve", [(9_000, 50)]), at(11))
+        assert ranks_by_count(store)["Eve"] == 5
+        assert submit(store, make_record("Eve", lap(10_000), model="finished"), at(12)).improved
+        assert ranks_by_count(store) == {"Eve": 1, "Cy": 2, "Ada": 3, "Bob": 4, "Dee": 4}
+
+    def test_ranks_close_up_on_removal_and_open_again_on_restore(self, store: BoardStore) -> None:
+        for n, (racer, ms) in enumerate([("Ada", 11_000), ("Bob", 11_004), ("Cy", 11_004),
+                                         ("Dee", 11_008), ("Eve", 15_000)]):
+            submit(store, make_record(racer, lap(ms)), at(n))
+        before = ranks_by_count(store)
+        removed = store.remove_entry(TRACK, "bob")
+        assert removed is not None
+        assert ranks_by_count(store) == {"Ada": 1, "Cy": 2, "Dee": 3, "Eve": 4}
+        store.restore_entry(removed)
+        store.restore_entry(removed)  # a second restore changes nothing
+        assert ranks_by_count(store) == before == {"Ada": 1, "Bob": 2, "Cy": 2, "Dee": 4, "Eve": 5}
+        for racer in ("ada", "bob", "cy", "dee", "eve"):
+            store.remove_entry(TRACK, racer)
+        assert store.count_better(TRACK, "1:10000") == 0
+
+    def test_ranks_of_very_slow_qualified_results(self, store: BoardStore) -> None:
+        # Results of 1,000 s and more share one bucket that is counted from its entries.
+        for n, (racer, ms) in enumerate([("Ada", 999_999), ("Bob", 1_000_000), ("Cy", 1_500_000),
+                                         ("Dee", 1_500_000), ("Eve", 20_000_000), ("Fay", 12_000)]):
+            submit(store, make_record(racer, lap(ms)), at(n))
+        submit(store, make_record("Gus", [(9_000, 50)]), at(9))
+        assert ranks_by_count(store) == {"Fay": 1, "Ada": 2, "Bob": 3, "Cy": 4, "Dee": 4, "Eve": 6,
+                                         "Gus": 7}
+        assert submit(store, make_record("Eve", lap(1_000_001), model="faster"), at(10)).improved
+        assert ranks_by_count(store) == {"Fay": 1, "Ada": 2, "Bob": 3, "Eve": 4, "Cy": 5, "Dee": 5,
+                                         "Gus": 7}
+
+    def test_ranks_stay_exact_through_a_season_of_pushes(self, store: BoardStore) -> None:
+        """Random pushes (new racers, improvements, worse runs, ties), removals and restores,
+        bunched in a few buckets: after every step, each racer's counted rank is their rank in
+        the full listing."""
+        rng = random.Random(20250301)
+        racers = [f"Racer {n}" for n in range(8)]
+        removed: dict[str, Entry] = {}
+        for step in range(40):
+            racer = rng.choice(racers)
+            action = rng.random()
+            if action < 0.15 and store.get_entry(TRACK, racer.casefold()) is not None:
+                entry = store.remove_entry(TRACK, racer.casefold())
+                assert entry is not None
+                removed[racer] = entry
+            elif action < 0.25 and racer in removed:
+                store.restore_entry(removed.pop(racer))
+            else:
+                laps = (lap(rng.choice([11_000, 11_003, 11_007, 11_010, 11_990, 12_000, 14_500]))
+                        if rng.random() < 0.8 else [(9_000, rng.choice([30, 55, 55.01, 90]))])
+                submit(store, make_record(racer, laps, model=f"m{step}"), at(step))
+            assert ranks_by_count(store) == ranks_by_listing(store), step
 
     def test_get_record_round_trips_the_record(self, store: BoardStore) -> None:
         record = make_record("Ada", runs=[[(12000, 100), (9000, 40)], [(11800, 100, "In progress")]],

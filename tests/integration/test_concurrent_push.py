@@ -86,6 +86,9 @@ def test_concurrent_pushes_lose_nothing(tmp_path: Path) -> None:
         assert len(entries) == WORKERS * PUSHES + 1
         assert len({e.racer for e in entries}) == len(entries)
         assert [e.rank for e in entries] == list(range(1, len(entries) + 1))  # all times differ
+        # the rank counts, moved by every process's pushes, agree with the listing
+        assert [store.count_better(TRACK, e.score_key) + 1 for e in store.top(TRACK, 500)] == \
+            [e.rank for e in entries]
     finally:
         store.close()
 

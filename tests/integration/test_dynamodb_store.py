@@ -14,6 +14,7 @@ import pytest
 from drboard_functions.errors import SubmissionLimitReached, TooSoon
 from drboard_functions.models import BoardSpec
 from drboard_functions.service import LeaderboardService
+from drboard_functions.stores import dynamodb
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
 from moto import mock_aws
 
@@ -194,3 +195,155 @@ def test_limits_hold_under_concurrent_pushes(dynamodb_local: DynamoDbLocal, loca
     history = services[0].history(SHARED, LIMITED)
     assert len(history) == allowed
     assert services[0].status(SHARED, LIMITED).boards[0].submissions == allowed
+
+
+# ---- ranks from the counters ------------------------------------------------------------------
+
+
+def ranks_of(store: DynamoDbStore, board_id: str = TRACK) -> dict[str, int]:
+    return {e.racer: store.count_better(board_id, e.score_key) + 1 for e in store.top(board_id, 5000)}
+
+
+def listed_ranks(store: DynamoDbStore, board_id: str = TRACK) -> dict[str, int]:
+    entries = store.top(board_id, 5000)
+    return {e.racer: 1 + sum(o.score_key < e.score_key for o in entries) for e in entries}
+
+
+class ReadCounter:
+    """What a client's calls read: Query items, and items got one by one or together."""
+
+    def __init__(self, client: Any) -> None:
+        self.queried = self.got = 0
+        client.meta.events.register("after-call.dynamodb.Query", self._query)
+        client.meta.events.register("after-call.dynamodb.GetItem", self._get)
+        client.meta.events.register("after-call.dynamodb.TransactGetItems", self._transact_get)
+
+    def _query(self, parsed: dict[str, Any], **_: Any) -> None:
+        self.queried += int(parsed.get("ScannedCount", 0))
+
+    def _get(self, parsed: dict[str, Any], **_: Any) -> None:
+        self.got += 1
+
+    def _transact_get(self, parsed: dict[str, Any], **_: Any) -> None:
+        self.got += len(parsed.get("Responses", []))
+
+    def clear(self) -> None:
+        self.queried = self.got = 0
+
+
+def test_a_board_from_before_the_counters_ranks_exactly_and_gets_them_on_its_next_push() -> None:
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        table = new_table(client)
+        seed_board(client, table, 200)  # entries written directly: no counters
+        store = DynamoDbStore(table, client)
+        reads = ReadCounter(client)
+        assert ranks_of(store) == listed_ranks(store)  # counted from the entries meanwhile
+        assert "rank_generation" not in client.get_item(
+            TableName=table, Key={"board": {"S": TRACK}, "sk": {"S": "#BOARD"}})["Item"]
+
+        LeaderboardService(store).push(make_record("Newcomer", [(19_000, 100)]))
+        assert "rank_generation" in client.get_item(
+            TableName=table, Key={"board": {"S": TRACK}, "sk": {"S": "#BOARD"}})["Item"]
+        assert ranks_of(store) == listed_ranks(store)
+        middle = store.get_entry(TRACK, "newcomer")
+        assert middle is not None
+        expected = listed_ranks(store)["Newcomer"] - 1
+        reads.clear()
+        assert store.count_better(TRACK, middle.score_key) == expected
+        assert (reads.queried, reads.got) == (0, 3)  # three counters, no entry
+
+
+def test_counting_a_board_that_changes_meanwhile_keeps_only_a_count_of_one_moment(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 0)  # the push below builds nothing
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        table = new_table(client)
+        seed_board(client, table, 50)
+        builder, pusher = DynamoDbStore(table, client), DynamoDbStore(table, client)
+        scans = []
+        real_query = builder._query
+
+        def push_during_the_first_scan(request: Any, limit: int | None = None) -> Any:
+            items = real_query(request, limit)
+            if request.get("IndexName") == "by_rank" and not scans:
+                scans.append(request)  # read, not yet counted: now an entry comes
+                LeaderboardService(pusher).push(make_record("Sneaky", [(9_000, 100)]))
+            return items
+
+        builder._query = push_during_the_first_scan  # type: ignore[method-assign]
+        generation = builder.build_rank_counters(TRACK)
+        assert generation is not None and scans
+        # the push during the first count is in the counters the board took: the racers it
+        # passed rank one lower
+        ranks = ranks_of(DynamoDbStore(table, client))
+        assert "Sneaky" in ranks and max(ranks.values()) == 51
+        assert ranks == listed_ranks(builder)
+
+
+def test_ranks_stay_exact_under_concurrent_pushes(dynamodb_local: DynamoDbLocal,
+                                                  local_table: str) -> None:
+    racers = 16
+    rng = random.Random(5)
+    # Each racer pushes three runs, in the same few buckets as the others, some improving.
+    records = [[make_record(f"Racer {n:02d}", [(rng.choice([11_000, 11_004, 11_009, 11_500, 12_000])
+                                                  - attempt * rng.choice([0, 3, 500]), 100)],
+                            model=f"m{attempt}") for attempt in range(3)] for n in range(racers)]
+    services = [LeaderboardService(DynamoDbStore(local_table, dynamodb_local.client()))
+                for _ in range(racers)]
+    barrier = threading.Barrier(racers)
+    errors: list[BaseException] = []
+
+    def push(n: int) -> None:
+        try:
+            barrier.wait(timeout=30)
+            for record in records[n]:
+                services[n].push(record)
+        except BaseException as error:
+            errors.append(error)
+
+    threads = [threading.Thread(target=push, args=(n,)) for n in range(racers)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=180)
+    assert errors == []
+    store = DynamoDbStore(local_table, dynamodb_local.client())
+    ranks = ranks_of(store)
+    assert len(ranks) == racers
+    assert ranks == listed_ranks(store)
+    page = services[0].board_page(TRACK, limit=100)
+    assert {e.racer: e.rank for e in page.entries} == ranks
+
+
+def test_a_rank_on_a_big_board_reads_three_counters(dynamodb_local: DynamoDbLocal,
+                                                     local_table: str) -> None:
+    client = dynamodb_local.client()
+    seed_board(client, local_table, BIG_BOARD)
+    store = DynamoDbStore(local_table, client)
+    assert store.build_rank_counters(TRACK) is not None
+    reads = ReadCounter(client)
+    everything = store.top(TRACK, BIG_BOARD)
+    for entry in everything[::97]:
+        reads.clear()
+        better = store.count_better(TRACK, entry.score_key)
+        assert better == sum(other.score_key < entry.score_key for other in everything)
+        assert (reads.queried, reads.got) == (0, 3)
+
+
+def test_a_push_leaves_a_big_board_from_before_the_counters_to_an_explicit_build(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 100)
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        table = new_table(client)
+        seed_board(client, table, 150)
+        store = DynamoDbStore(table, client)
+        receipt = LeaderboardService(store).push(make_record("Newcomer", [(19_000, 100)]))
+        assert receipt.rank == listed_ranks(store)["Newcomer"]  # counted from the entries
+        assert ranks_of(store) == listed_ranks(store)
+        assert store.build_rank_counters(TRACK, max_racers=100) is None
+        assert store.build_rank_counters(TRACK) is not None
+        LeaderboardService(store).push(make_record("Latecomer", [(8_500, 100)]))
+        assert ranks_of(store) == listed_ranks(store)

@@ -194,9 +194,9 @@ class CallRecorder:
     def __call__(self, model: Any, params: dict[str, Any], **_: Any) -> None:
         service = model.service_model.endpoint_prefix
         operation = model.name
-        if operation == "TransactWriteItems":
+        if operation in ("TransactWriteItems", "TransactGetItems"):  # IAM checks each item's action
             kinds = {"Put": "PutItem", "Update": "UpdateItem", "Delete": "DeleteItem",
-                     "ConditionCheck": "ConditionCheckItem"}
+                     "ConditionCheck": "ConditionCheckItem", "Get": "GetItem"}
             for item in params["TransactItems"]:
                 (kind,) = item
                 self.calls.append((f"dynamodb:{kinds[kind]}", "table"))

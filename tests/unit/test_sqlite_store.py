@@ -121,3 +121,32 @@ def test_a_board_file_from_before_versions_opens_and_counts_from_zero(tmp_path: 
     submit(store, make_record("Ada"), at(1))
     stored = store.get_board(TRACK)
     assert stored is not None and stored.version == 1 and stored.participants == 1
+
+
+def test_a_board_file_from_before_the_rank_counts_gets_them_on_opening(tmp_path: Path) -> None:
+    path = tmp_path / "old.db"
+    store = SqliteStore(path)
+    laps = {"Ada": 12_000, "Bob": 12_004, "Cy": 12_004, "Dee": 13_500, "Eve": 9_999}
+    for n, (racer, ms) in enumerate(laps.items()):
+        submit(store, make_record(racer, [(ms, 100)]), at(n))
+    submit(store, make_record("Fay", [(9_000, 60)]), at(9))
+    cw = make_board("reInvent2019_track_cw", direction="cw")
+    submit(store, make_record("Gus", [(15_000, 100)], direction="cw"), at(10), cw)
+    store.close()
+    old = sqlite3.connect(path)  # as a file written before the counts existed
+    old.execute("DROP TABLE rank_counts")
+    old.commit()
+    old.close()
+
+    store = SqliteStore(path)
+    try:
+        ranks = {e.racer: store.count_better(TRACK, e.score_key) + 1 for e in store.top(TRACK, 10)}
+        assert ranks == {"Eve": 1, "Ada": 2, "Bob": 3, "Cy": 3, "Dee": 5, "Fay": 6}
+        gus = store.get_entry(cw.board_id, "gus")
+        assert gus is not None and store.count_better(cw.board_id, gus.score_key) == 0
+        submit(store, make_record("Hal", [(12_002, 100)]), at(11))
+        hal = store.get_entry(TRACK, "hal")
+        assert hal is not None and store.count_better(TRACK, hal.score_key) == 2
+        assert store.count_better(TRACK, "1:10000") == 7
+    finally:
+        store.close()

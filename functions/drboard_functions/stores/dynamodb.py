@@ -17,7 +17,16 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
   so that history reads stay small; it carries no index attribute, so no index copies it;
 - ``F#<fingerprint>``: an evaluation's content on the board, and the racer (``racer_key``) who
   pushed it first: a copy under another racer fails the push transaction;
-- ``A#<event_id>``: one audit event (``data``), written once and never changed.
+- ``A#<event_id>``: one audit event (``data``), written once and never changed;
+- ``#RANK#<generation>#<node>``: the counts of entries by score, one item per node of the
+  layout in ``rank_buckets``, a number attribute ``c:<child>`` per child. The board's
+  ``rank_generation`` names the counters in use; every write that adds, replaces or removes an
+  entry moves them in its transaction, on condition that the generation is still the board's,
+  so they never drift. A rank reads the three items of its path (TransactGetItems: one moment
+  of the board), whatever the board's size. A board created before the counters has no
+  generation: its ranks are counted from the entries, as they were, until its counters are
+  built (``build_rank_counters``: by its next push if it has at most 10,000 racers, else once
+  by an operator).
 
 Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
 holds an alias's claim and ``P#<principal>`` the same claim by its sign-in, written together in
@@ -33,6 +42,7 @@ Only this module talks to DynamoDB.
 from __future__ import annotations
 
 import random
+import secrets
 import time
 import zlib
 from collections.abc import Iterator, Sequence
@@ -55,6 +65,7 @@ from ..models import (
     SubmissionLimits,
     WriteOutcome,
 )
+from . import rank_buckets
 from .aws_errors import translating
 from .base import (
     AliasConflict,
@@ -77,6 +88,7 @@ if TYPE_CHECKING:
     from mypy_boto3_dynamodb.type_defs import (
         AttributeValueTypeDef,
         QueryInputTypeDef,
+        TransactGetItemTypeDef,
         TransactWriteItemTypeDef,
     )
 
@@ -91,6 +103,15 @@ RACER_INDEX = "by_racer"
 BOARDS_INDEX = "boards"
 
 BATCH_GET_KEYS = 100
+TRANSACT_ITEMS = 100
+FIRST_GENERATION = "0"  # the rank counters of a board created with them
+COUNT_PREFIX = "c:"
+BUILD_ATTEMPTS = 3  # of counting a board from before the rank counters, while it changes
+READ_ATTEMPTS = 3  # of reading a rank's counters together, while pushes move them
+# A push to a board from before the rank counters counts its entries to build them when it has
+# at most this many racers (about as many items as one rank used to read); a bigger board needs
+# one build_rank_counters call outside a push, which may take longer than a push function may.
+LAZY_BUILD_MAX_RACERS = 10_000
 MAX_ATTEMPTS = 10  # of a push that loses a race with another push of the same racer or board
 BACKOFF_S = 0.01
 MAX_BACKOFF_S = 0.5
@@ -120,11 +141,17 @@ def audit_sk(event_id: str) -> str:
     return f"A#{event_id}"
 
 
+def counter_sk(generation: str, node: str) -> str:
+    return f"#RANK#{generation}#{node}"
+
+
 def _s(value: str) -> AttributeValueTypeDef:
     return {"S": value}
 
 
 def board_item(board: Board) -> Item:
+    """A board without rank counters (as boards were before them); what a bulk loader writes
+    directly, before ``build_rank_counters``."""
     return {"board": _s(board.board_id), "sk": _s(BOARD_SK), "board_kind": _s(BOARD_KIND),
             "rank_key": _s(BOARD_SK), "data": _s(board.model_dump_json()),
             "participants": {"N": "0"}}
@@ -135,6 +162,12 @@ def entry_item(entry: Entry) -> Item:
     return {"board": _s(entry.board_id), "sk": _s(entry_sk(entry.racer_key)),
             "rank_key": _s(entry.rank_key), "score_key": _s(entry.score_key),
             "data": _s(entry.model_dump_json())}
+
+
+def counter_item(board_id: str, generation: str, node: str, counts: dict[str, int]) -> Item:
+    item: Item = {"board": _s(board_id), "sk": _s(counter_sk(generation, node))}
+    item.update({COUNT_PREFIX + child: {"N": str(n)} for child, n in counts.items()})
+    return item
 
 
 def submission_item(submission: Submission) -> Item:
@@ -172,6 +205,8 @@ class DynamoDbStore:
     def __init__(self, table_name: str, client: DynamoDBClient | None = None) -> None:
         self.table = table_name
         self.client: DynamoDBClient = client if client is not None else boto3.client("dynamodb")
+        # A board's rank generation, once set, never changes: it is safe to remember.
+        self._generations: dict[str, str] = {}
 
     # ---- boards ---------------------------------------------------------------------------
 
@@ -181,8 +216,9 @@ class DynamoDbStore:
 
     def create_board(self, board: Board) -> StoredBoard:
         try:
-            self.client.put_item(TableName=self.table, Item=board_item(board),
-                                 ConditionExpression="attribute_not_exists(sk)")
+            self.client.put_item(
+                TableName=self.table, ConditionExpression="attribute_not_exists(sk)",
+                Item=board_item(board) | {"rank_generation": _s(FIRST_GENERATION)})
         except ClientError as error:
             if _code(error) != "ConditionalCheckFailedException":
                 raise
@@ -258,6 +294,9 @@ class DynamoDbStore:
         if audit is not None:
             stored.append({"Put": {"TableName": self.table, "Item": audit_item(audit)}})
         board_at = len(stored) + 1
+        exists, generation = self._board_generation(board_id)
+        if exists and generation is None:
+            generation = self.build_rank_counters(board_id, max_racers=LAZY_BUILD_MAX_RACERS)
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 _backoff(attempt)
@@ -267,13 +306,17 @@ class DynamoDbStore:
             if current is None:
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
                                       "ConditionExpression": "attribute_not_exists(sk)"}})
-                items.append(self._board_change(board_id, +1))
+                items.append(self._board_change(board_id, +1, generation))
             elif improves:
+                # Exactly the entry read: the counters take its score off.
                 items.append({"Put": {"TableName": self.table, "Item": entry_item(entry),
-                                      "ConditionExpression": "rank_key > :new",
-                                      "ExpressionAttributeValues": {":new": _s(entry.rank_key)}}})
-                items.append(self._board_change(board_id, 0))
+                                      "ConditionExpression": "rank_key = :seen",
+                                      "ExpressionAttributeValues": {":seen": _s(current.rank_key)}}})
+                items.append(self._board_change(board_id, 0, generation))
             # else: not better. The entry stays as it is (entries only ever improve).
+            if improves:
+                items += self._count_changes(board_id, generation, entry.score_key,
+                                             current.score_key if current else None)
             try:
                 self.client.transact_write_items(TransactItems=items)
             except ClientError as error:
@@ -286,8 +329,12 @@ class DynamoDbStore:
                     raise LimitReached(self.tally(board_id, key)) from None
                 if "ConditionalCheckFailed" in reasons[copies]:
                     raise FingerprintTaken(self._copied_from(board_id, fingerprints)) from None
-                if current is None and reasons[board_at:board_at + 1] == ["ConditionalCheckFailed"]:
-                    raise BoardNotFound(f"no board {board_id!r}") from None
+                if reasons[board_at:board_at + 1] == ["ConditionalCheckFailed"]:
+                    # No board, or its rank counters were built meanwhile.
+                    exists, generation = self._board_generation(board_id)
+                    if not exists:
+                        raise BoardNotFound(f"no board {board_id!r}") from None
+                    continue
                 if not set(reasons) & {"ConditionalCheckFailed", "TransactionConflict"}:
                     raise
                 continue  # another push changed the entry or the board meanwhile: look again
@@ -358,38 +405,158 @@ class DynamoDbStore:
             current = self.get_entry(board_id, racer_key)
             if current is None:
                 return None
+            _, generation = self._board_generation(board_id)
             try:
                 self.client.transact_write_items(TransactItems=[
                     {"Delete": {"TableName": self.table,
                                 "Key": {"board": _s(board_id), "sk": _s(entry_sk(racer_key))},
                                 "ConditionExpression": "rank_key = :seen",
                                 "ExpressionAttributeValues": {":seen": _s(current.rank_key)}}},
-                    self._board_change(board_id, -1)])
+                    self._board_change(board_id, -1, generation),
+                    *self._count_changes(board_id, generation, None, current.score_key)])
             except ClientError as error:
                 if _code(error) != "TransactionCanceledException":
                     raise
-                continue  # the entry improved meanwhile: remove what is there now
+                continue  # the entry improved, or the counters were built, meanwhile: look again
             return current
         raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up removing the entry; "
                         "try again in a moment")
 
     def restore_entry(self, entry: Entry) -> None:
-        try:
-            self.client.transact_write_items(TransactItems=[
-                {"Put": {"TableName": self.table, "Item": entry_item(entry),
-                         "ConditionExpression": "attribute_not_exists(sk)"}},
-                self._board_change(entry.board_id, +1)])
-        except ClientError as error:
-            if _code(error) != "TransactionCanceledException":
-                raise  # cancelled: the racer has an entry again, from a push meanwhile
+        for attempt in range(MAX_ATTEMPTS):
+            if attempt:
+                _backoff(attempt)
+            exists, generation = self._board_generation(entry.board_id)
+            if not exists:
+                return
+            try:
+                self.client.transact_write_items(TransactItems=[
+                    {"Put": {"TableName": self.table, "Item": entry_item(entry),
+                             "ConditionExpression": "attribute_not_exists(sk)"}},
+                    self._board_change(entry.board_id, +1, generation),
+                    *self._count_changes(entry.board_id, generation, entry.score_key, None)])
+            except ClientError as error:
+                if _code(error) != "TransactionCanceledException":
+                    raise
+                if _cancellation_codes(error)[:1] == ["ConditionalCheckFailed"]:
+                    return  # the racer has an entry again, from a push meanwhile
+                continue  # the counters were built meanwhile, or another write was under way
+            return
+        raise StoreBusy(f"{entry.board_id!r} is busy with other pushes: gave up restoring the entry; "
+                        "try again in a moment")
 
-    def _board_change(self, board_id: str, change: int) -> TransactWriteItemTypeDef:
-        """The board's number of racers changed by ``change``, and its version bumped."""
+    def _board_change(self, board_id: str, change: int,
+                      generation: str | None) -> TransactWriteItemTypeDef:
+        """The board's number of racers changed by ``change``, and its version bumped, on
+        condition that its rank counters are still those of ``generation`` (None: none)."""
+        values: dict[str, AttributeValueTypeDef] = {":change": {"N": str(change)}, ":one": {"N": "1"}}
+        if generation is None:
+            condition = "attribute_exists(sk) AND attribute_not_exists(rank_generation)"
+        else:
+            condition = "rank_generation = :generation"
+            values[":generation"] = _s(generation)
         return {"Update": {
             "TableName": self.table, "Key": {"board": _s(board_id), "sk": _s(BOARD_SK)},
             "UpdateExpression": "SET participants = participants + :change ADD board_version :one",
-            "ConditionExpression": "attribute_exists(sk)",
-            "ExpressionAttributeValues": {":change": {"N": str(change)}, ":one": {"N": "1"}}}}
+            "ConditionExpression": condition, "ExpressionAttributeValues": values}}
+
+    # ---- rank counters --------------------------------------------------------------------
+
+    def _count_changes(self, board_id: str, generation: str | None, added: str | None,
+                       removed: str | None) -> list[TransactWriteItemTypeDef]:
+        """The counter updates for an entry of score key ``removed`` replaced by ``added``."""
+        if generation is None:
+            return []
+        updates: list[TransactWriteItemTypeDef] = []
+        for node, children in rank_buckets.changes(added, removed).items():
+            names = {f"#c{i}": COUNT_PREFIX + child for i, child in enumerate(children)}
+            values: dict[str, AttributeValueTypeDef] = {
+                f":c{i}": {"N": str(n)} for i, n in enumerate(children.values())}
+            updates.append({"Update": {
+                "TableName": self.table,
+                "Key": {"board": _s(board_id), "sk": _s(counter_sk(generation, node))},
+                "UpdateExpression": "ADD " + ", ".join(f"#c{i} :c{i}" for i in range(len(children))),
+                "ExpressionAttributeNames": names, "ExpressionAttributeValues": values}})
+        return updates
+
+    def _board_generation(self, board_id: str) -> tuple[bool, str | None]:
+        """Whether the board exists, and the generation of its rank counters (None: none)."""
+        if board_id in self._generations:
+            return True, self._generations[board_id]
+        item = self.client.get_item(
+            TableName=self.table, ConsistentRead=True, ProjectionExpression="sk, rank_generation",
+            Key={"board": _s(board_id), "sk": _s(BOARD_SK)}).get("Item")
+        if item is None:
+            return False, None
+        if "rank_generation" not in item:
+            return True, None
+        self._generations[board_id] = item["rank_generation"]["S"]
+        return True, self._generations[board_id]
+
+    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
+        """Give a board from before the rank counters its counters, counted from its entries
+        (once: this reads every entry), and return their generation; None when the board does
+        not exist, has more than ``max_racers`` racers, or kept changing while it was counted
+        (its ranks are then still counted from the entries, and the next push tries again).
+        Safe alongside pushes: the counters are written under a new generation, which becomes
+        the board's only if no entry changed (the board's version did not move) since the
+        entries were read."""
+        for _ in range(BUILD_ATTEMPTS):
+            item = self._get(board_id, BOARD_SK)
+            if item is None:
+                return None
+            if "rank_generation" in item:
+                self._generations[board_id] = item["rank_generation"]["S"]
+                return self._generations[board_id]
+            if max_racers is not None and int(item["participants"]["N"]) > max_racers:
+                return None
+            version = item.get("board_version", {"N": "0"})["N"]
+            score_keys = [entry["score_key"]["S"] for entry in self._query({
+                "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
+                "KeyConditionExpression": "board = :board AND rank_key > :first",
+                "ExpressionAttributeValues": {":board": _s(board_id), ":first": _s(FIRST_ENTRY)},
+                "ProjectionExpression": "score_key"})]
+            generation = secrets.token_hex(6)
+            counters = [{"Put": {"TableName": self.table,
+                                 "Item": counter_item(board_id, generation, node, counts)}}
+                        for node, counts in rank_buckets.tally(score_keys).items()]
+            for start in range(0, len(counters), TRANSACT_ITEMS):
+                self.client.transact_write_items(
+                    TransactItems=counters[start:start + TRANSACT_ITEMS])  # type: ignore[arg-type]
+            try:
+                self.client.update_item(
+                    TableName=self.table, Key={"board": _s(board_id), "sk": _s(BOARD_SK)},
+                    UpdateExpression="SET rank_generation = :generation",
+                    ConditionExpression="attribute_not_exists(rank_generation) AND "
+                                        "(attribute_not_exists(board_version) OR board_version = :seen)",
+                    ExpressionAttributeValues={":generation": _s(generation), ":seen": {"N": version}})
+            except ClientError as error:
+                if _code(error) != "ConditionalCheckFailedException":
+                    raise
+                continue  # an entry changed meanwhile, or another build won: look again
+            self._generations[board_id] = generation
+            return generation
+        return None
+
+    def _read_counters(self, board_id: str, generation: str,
+                       nodes: list[str]) -> dict[str, dict[str, int]]:
+        """The counts of ``nodes``, read together as of one moment; should pushes keep moving
+        them, read one by one (each exact, together off by what changed in between)."""
+        keys = [{"board": _s(board_id), "sk": _s(counter_sk(generation, node))} for node in nodes]
+        request: list[TransactGetItemTypeDef] = [{"Get": {"TableName": self.table, "Key": key}}
+                                                 for key in keys]
+        for attempt in range(READ_ATTEMPTS):
+            if attempt:
+                _backoff(attempt)
+            try:
+                answers = self.client.transact_get_items(TransactItems=request)["Responses"]
+            except ClientError as error:
+                if _code(error) != "TransactionCanceledException":
+                    raise
+                continue  # a push was moving these counters
+            return {node: _counts(answer.get("Item")) for node, answer in zip(nodes, answers, strict=True)}
+        return {node: _counts(self._get(board_id, key["sk"]["S"]))
+                for node, key in zip(nodes, keys, strict=True)}
 
     def append_audit(self, event: AuditEvent) -> None:
         self.client.put_item(TableName=self.table, Item=audit_item(event),
@@ -520,13 +687,25 @@ class DynamoDbStore:
         return Entry.model_validate_json(item["data"]["S"]) if item else None
 
     def count_better(self, board_id: str, score_key: str) -> int:
-        # Score keys are fixed-width prefixes of rank keys, so "rank_key < score_key" selects
-        # exactly the entries with a lower score key.
+        _, generation = self._board_generation(board_id)
+        if generation is None:  # no board, or one whose counters are not built yet
+            return self._count_entries(board_id, FIRST_ENTRY, score_key)
+        nodes = [node for node, _ in rank_buckets.path(score_key)]
+        counts = self._read_counters(board_id, generation, nodes)
+        better = rank_buckets.count_lower(score_key, counts.__getitem__)
+        if rank_buckets.in_overflow(score_key):
+            better += self._count_entries(board_id, rank_buckets.OVERFLOW_START, score_key)
+        return better
+
+    def _count_entries(self, board_id: str, first: str, score_key: str) -> int:
+        """How many entries have a rank key from ``first`` up to ``score_key``: score keys are
+        fixed-width prefixes of rank keys, so these are the entries with a score key from
+        ``first``'s and lower than ``score_key``. Reads every one of them."""
         request: QueryInputTypeDef = {
             "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
             "Select": "COUNT",
             "KeyConditionExpression": "board = :board AND rank_key BETWEEN :first AND :key",
-            "ExpressionAttributeValues": {":board": _s(board_id), ":first": _s(FIRST_ENTRY),
+            "ExpressionAttributeValues": {":board": _s(board_id), ":first": _s(first),
                                           ":key": _s(score_key)},
         }
         return sum(page["Count"] for page in self._pages(request))
@@ -630,6 +809,12 @@ class DynamoDbStore:
 def _board(item: Item) -> StoredBoard:
     return StoredBoard(Board.model_validate_json(item["data"]["S"]), int(item["participants"]["N"]),
                        int(item.get("board_version", {"N": "0"})["N"]))
+
+
+def _counts(item: Item | None) -> dict[str, int]:
+    """A counter item's counts by child; no item, no entries."""
+    return {name[len(COUNT_PREFIX):]: int(value["N"]) for name, value in (item or {}).items()
+            if name.startswith(COUNT_PREFIX) and "N" in value}
 
 
 def _code(error: ClientError) -> str:

@@ -1,7 +1,10 @@
 """The embedded board: SQLite (WAL), one transaction per push.
 
 Entries sit in one table keyed by (board, racer) with an index on (board, rank key), so the top N
-is an index range read of N rows whatever the board's size.
+is an index range read of N rows whatever the board's size. ``rank_counts`` holds, per board, the
+counts of entries by score laid out by ``rank_buckets``, changed in the same transaction as every
+entry: a rank sums at most three index ranges of bounded size, never the better entries. A board
+file from before the counts gets them when it is opened.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from ..models import (
     SubmissionLimits,
     WriteOutcome,
 )
+from . import rank_buckets
 from .base import (
     AliasConflict,
     AuditSlice,
@@ -81,6 +85,13 @@ CREATE TABLE IF NOT EXISTS audit (
     event    TEXT NOT NULL,
     PRIMARY KEY (board_id, event_id)
 ) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS rank_counts (
+    board_id TEXT NOT NULL,
+    node     TEXT NOT NULL,
+    child    TEXT NOT NULL,
+    entries  INTEGER NOT NULL,
+    PRIMARY KEY (board_id, node, child)
+) WITHOUT ROWID;
 CREATE TABLE IF NOT EXISTS aliases (
     racer_key TEXT PRIMARY KEY,
     principal TEXT NOT NULL UNIQUE,
@@ -107,8 +118,11 @@ class SqliteStore:
         self._first = self._connect()
         self._enable_wal()
         with self._write():
+            counted = self._has_table("rank_counts")
             for statement in filter(str.strip, SCHEMA.split(";")):
                 self._db.execute(statement)
+            if not counted:  # a board file from before the rank counts
+                self._count_every_board()
             columns = {row[1] for row in self._db.execute("PRAGMA table_info(boards)")}
             if "version" not in columns:  # a board file from before versions
                 self._db.execute("ALTER TABLE boards ADD COLUMN version INTEGER NOT NULL DEFAULT 0")
@@ -146,6 +160,17 @@ class SqliteStore:
                 if time.monotonic() > deadline:
                     raise
                 time.sleep(0.01)
+
+    def _has_table(self, name: str) -> bool:
+        return self._db.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?",
+                                (name,)).fetchone() is not None
+
+    def _count_every_board(self) -> None:
+        keys: dict[str, list[str]] = {}
+        for board_id, score_key in self._db.execute("SELECT board_id, score_key FROM entries"):
+            keys.setdefault(board_id, []).append(score_key)
+        for board_id, score_keys in keys.items():
+            self._move_counts(self._db, board_id, rank_buckets.tally(score_keys))
 
     def close(self) -> None:
         with self._connecting:
@@ -236,6 +261,8 @@ class SqliteStore:
                 (entry.board_id, entry.racer_key, entry.score_key, entry.rank_key,
                  entry.model_dump_json()),
             )
+            self._move_counts(db, entry.board_id, rank_buckets.changes(
+                entry.score_key, current.score_key if current else None))
             db.execute("UPDATE boards SET participants = participants + ?, version = version + 1 "
                        "WHERE board_id = ?", (1 if current is None else 0, entry.board_id))
             return WriteOutcome(duplicate=False, improved=True, entry=entry)
@@ -307,13 +334,30 @@ class SqliteStore:
         return Entry.model_validate_json(row[0]) if row else None
 
     def count_better(self, board_id: str, score_key: str) -> int:
-        # Score keys are fixed-width prefixes of rank keys, so "rank_key < score_key" selects
-        # exactly the entries with a lower score key, using the rank index.
-        row = self._db.execute(
-            "SELECT COUNT(*) FROM entries WHERE board_id = ? AND rank_key < ?",
-            (board_id, score_key),
-        ).fetchone()
+        # One statement, so the counts it adds up are of one moment of the board.
+        steps = rank_buckets.path(score_key)
+        terms = ["(SELECT COALESCE(SUM(entries), 0) FROM rank_counts "
+                 "WHERE board_id = ? AND node = ? AND child < ?)"] * len(steps)
+        parameters: list[str] = [value for node, child in steps for value in (board_id, node, child)]
+        if rank_buckets.in_overflow(score_key):
+            # Score keys are fixed-width prefixes of rank keys, so this range holds exactly the
+            # entries under the overflow with a lower score key.
+            terms.append("(SELECT COUNT(*) FROM entries "
+                         "WHERE board_id = ? AND rank_key >= ? AND rank_key < ?)")
+            parameters += [board_id, rank_buckets.OVERFLOW_START, score_key]
+        row = self._db.execute("SELECT " + " + ".join(terms), parameters).fetchone()
         return int(row[0])
+
+    @staticmethod
+    def _move_counts(db: sqlite3.Connection, board_id: str,
+                     moves: dict[str, dict[str, int]]) -> None:
+        for node, children in moves.items():
+            for child, change in children.items():
+                db.execute(
+                    "INSERT INTO rank_counts VALUES (?, ?, ?, ?) ON CONFLICT (board_id, node, child) "
+                    "DO UPDATE SET entries = entries + excluded.entries", (board_id, node, child, change))
+            db.execute("DELETE FROM rank_counts WHERE board_id = ? AND node = ? AND entries = 0",
+                       (board_id, node))
 
     def history(self, racer_key: str, board_id: str | None = None) -> list[Submission]:
         if board_id is None:
@@ -354,6 +398,7 @@ class SqliteStore:
             current = self._entry(db, board_id, racer_key)
             if current is not None:
                 db.execute("DELETE FROM entries WHERE board_id = ? AND racer_key = ?", (board_id, racer_key))
+                self._move_counts(db, board_id, rank_buckets.changes(None, current.score_key))
                 db.execute("UPDATE boards SET participants = participants - 1, version = version + 1 "
                            "WHERE board_id = ?", (board_id,))
             return current
@@ -365,6 +410,7 @@ class SqliteStore:
                 (entry.board_id, entry.racer_key, entry.score_key, entry.rank_key,
                  entry.model_dump_json())).rowcount
             if added:
+                self._move_counts(db, entry.board_id, rank_buckets.changes(entry.score_key, None))
                 db.execute("UPDATE boards SET participants = participants + 1, version = version + 1 "
                            "WHERE board_id = ?", (entry.board_id,))
 
