@@ -24,11 +24,7 @@ from drboard_assembler.record import Alias, EvaluationRun, RaceType, Record
 from pydantic import TypeAdapter, ValidationError
 
 from . import display, ranking
-from .cursors import RankCursor as _Cursor
-from .cursors import decode_export_cursor as _decode_export_cursor
-from .cursors import decode_page_cursor as _decode_page_cursor
-from .cursors import export_cursor as _export_cursor
-from .cursors import page_cursor as _page_cursor
+from .cursors import RankCursor, decode_export_cursor, decode_page_cursor, export_cursor, page_cursor
 from .errors import (
     AliasTaken,
     Banned,
@@ -101,11 +97,7 @@ from .stores.base import (
     RecordArchive,
     StoredBoard,
 )
-from .views import board_view as _board_view
-from .views import design_of as _design
-from .views import entry_view as _entry_view
-from .views import history_item as _history_item
-from .views import page_tag
+from .views import board_view, design_of, entry_view, history_item, page_tag
 
 Clock = Callable[[], datetime]
 DEFAULT_PAGE = 100
@@ -297,8 +289,8 @@ class LeaderboardService:
             improved=improved,
             rank=rank,
             participants=stored.participants if stored else 1,
-            entry=_entry_view(best, rank, top[0] if top else None),
-            submission=_history_item(submission, best),
+            entry=entry_view(best, rank, top[0] if top else None),
+            submission=history_item(submission, best),
         )
 
     def _board_for(self, record: Record, board_id: str | None, now: datetime) -> StoredBoard:
@@ -325,15 +317,15 @@ class LeaderboardService:
         ones are left out, so a page may be short; ``next_cursor`` is None on the last."""
         _check_limit(limit)
         with _bad_cursor():
-            page = self.store.boards_page(_decode_page_cursor("boards", cursor), limit)
+            page = self.store.boards_page(decode_page_cursor("boards", cursor), limit)
         now = self.clock()
-        return BoardList(boards=[_board_view(stored, now) for stored in page.boards
+        return BoardList(boards=[board_view(stored, now) for stored in page.boards
                                  if stored.board.deleted_at is None],
-                         next_cursor=_page_cursor("boards", page.after))
+                         next_cursor=page_cursor("boards", page.after))
 
     def board_page(self, board_id: str, limit: int = 100, cursor: str | None = None) -> BoardPage:
         _check_limit(limit)
-        after = _Cursor.decode(cursor) if cursor else None
+        after = RankCursor.decode(cursor) if cursor else None
         if after is None:
             found, entries = self.store.front_page(board_id, limit)
             stored = self._live(board_id, found)
@@ -348,11 +340,11 @@ class LeaderboardService:
         for offset, entry in enumerate(entries):
             position = (after.position if after else 0) + offset + 1
             rank = previous.rank if previous and previous.score_key == entry.score_key else position
-            views.append(_entry_view(entry, rank, leader, design=shown))
-            previous = _Cursor(entry.rank_key, entry.score_key, rank, position)
+            views.append(entry_view(entry, rank, leader, design=shown))
+            previous = RankCursor(entry.rank_key, entry.score_key, rank, position)
         more = len(entries) == limit and previous is not None
         return BoardPage(
-            board=_board_view(stored, self.clock()),
+            board=board_view(stored, self.clock()),
             entries=views,
             next_cursor=previous.encode() if more and previous else None,
         )
@@ -360,7 +352,7 @@ class LeaderboardService:
     def board_tag(self, board_id: str) -> str:
         """The board's :func:`page_tag`, in one read: unchanged, its pages are too."""
         stored = self._live(board_id, self.store.get_board(board_id))
-        return page_tag(_board_view(stored, self.clock()))
+        return page_tag(board_view(stored, self.clock()))
 
     def racer(self, board_id: str, racer: str, limit: int | None = None,
               cursor: str | None = None) -> RacerView:
@@ -377,15 +369,15 @@ class LeaderboardService:
             _check_limit(limit)
             with _bad_cursor():
                 page = self.store.history_page(key, board_id,
-                                               _decode_page_cursor("history", cursor), limit)
+                                               decode_page_cursor("history", cursor), limit)
             submissions, after = page.submissions, page.after
         return RacerView(
-            board=_board_view(stored, self.clock()),
+            board=board_view(stored, self.clock()),
             racer=entry.racer,
-            entry=_entry_view(entry, rank, self._leader(board_id), design=shown),
-            history=[_history_item(s, entry) for s in submissions],
+            entry=entry_view(entry, rank, self._leader(board_id), design=shown),
+            history=[history_item(s, entry) for s in submissions],
             record=record if shown else None,
-            next_cursor=_page_cursor("history", after),
+            next_cursor=page_cursor("history", after),
         )
 
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
@@ -399,9 +391,9 @@ class LeaderboardService:
         for racer in racers:
             entry, record = self._entry_and_record(board_id, racer)
             rank = self.store.count_better(board_id, entry.score_key) + 1
-            compared.append(ComparedRacer(racer=entry.racer, entry=_entry_view(entry, rank, leader),
+            compared.append(ComparedRacer(racer=entry.racer, entry=entry_view(entry, rank, leader),
                                           facts=design_facts(record)))
-        return Comparison(board=_board_view(stored, self.clock()), racers=compared,
+        return Comparison(board=board_view(stored, self.clock()), racers=compared,
                           differences=differences([c.facts for c in compared]))
 
     def insights(self, board_id: str, top: int = DEFAULT_TOP) -> Insights:
@@ -453,14 +445,14 @@ class LeaderboardService:
         if board_id is not None:
             self._require_board(board_id)
         with _bad_cursor():
-            page = self.store.history_page(key, board_id, _decode_page_cursor("history", cursor),
+            page = self.store.history_page(key, board_id, decode_page_cursor("history", cursor),
                                            limit)
         items: list[HistoryItem] = []
         for stored, submissions in self._by_board(page.submissions):
             best = self.store.get_entry(stored.board.board_id, key)
-            items.extend(_history_item(submission, best) for submission in submissions)
+            items.extend(history_item(submission, best) for submission in submissions)
         items.sort(key=lambda item: (item.submitted_at, item.board_id, item.submission_id))
-        return RacerHistory(racer=racer, history=items, next_cursor=_page_cursor("history", page.after))
+        return RacerHistory(racer=racer, history=items, next_cursor=page_cursor("history", page.after))
 
     def status(self, racer: str, board_id: str | None = None) -> RacerSummary:
         """Where the racer stands on each board they pushed to (or on one): their latest
@@ -494,10 +486,10 @@ class LeaderboardService:
         if board.max_submissions is not None:
             left = max(0, board.max_submissions - tally.submissions)
         return RacerStatus(
-            board=_board_view(stored, now),
+            board=board_view(stored, now),
             racer=latest.racer,
-            latest=_history_item(latest, entry),
-            entry=_entry_view(entry, rank, self._leader(board.board_id),
+            latest=history_item(latest, entry),
+            entry=entry_view(entry, rank, self._leader(board.board_id),
                               design=board.designs_shown(now)),
             submissions=tally.submissions,
             submissions_left=left,
@@ -555,7 +547,7 @@ class LeaderboardService:
         if stored.board != board:
             raise BoardExists(f"there is already a board {board.board_id!r}")
         self._audit(board.board_id, "create", caller, detail=board.title)
-        return _board_view(stored, now)
+        return board_view(stored, now)
 
     def update_board(self, board_id: str, changes: BoardChanges,
                      caller: Caller = LOCAL_ORGANISER) -> BoardView:
@@ -579,7 +571,7 @@ class LeaderboardService:
         if rescores and stored.participants:
             raise BoardLocked(_LOCKED.format(board_id))
         if updated == board:  # nothing changes: nothing is written, the version stays
-            return _board_view(stored, self.clock())
+            return board_view(stored, self.clock())
         view = self._save(updated, only_if_empty=rescores)
         self._audit(board_id, "update", caller,
                     detail=changes.model_dump_json(exclude_unset=True))
@@ -590,7 +582,7 @@ class LeaderboardService:
         board = self._named(board_id).board
         now = self.clock()
         if board.status(now) is BoardStatus.CLOSED:
-            return _board_view(self._named(board_id), now)
+            return board_view(self._named(board_id), now)
         opens_at = board.opens_at if board.opens_at and board.opens_at < now else None
         view = self._save(board.model_copy(update={"closes_at": now, "opens_at": opens_at}))
         self._audit(board_id, "close", caller)
@@ -685,7 +677,7 @@ class LeaderboardService:
 
     def _moderation(self, board_id: str, racer: str, removed: bool) -> Moderation:
         stored = self._require_board(board_id)
-        return Moderation(board=_board_view(stored, self.clock()), racer=racer,
+        return Moderation(board=board_view(stored, self.clock()), racer=racer,
                           banned=racer_key(racer) in stored.board.banned, entry_removed=removed)
 
     def _event(self, board_id: str, action: AuditAction, caller: Caller | None, at: datetime,
@@ -712,7 +704,7 @@ class LeaderboardService:
             raise BoardLocked(_LOCKED.format(board.board_id)) from None
         except KeyError:
             raise BoardNotFound(f"no board {board.board_id!r}") from None
-        return _board_view(stored, self.clock())
+        return board_view(stored, self.clock())
 
     # ---- export and import ----------------------------------------------------------------
 
@@ -722,7 +714,7 @@ class LeaderboardService:
         stored = self.store.get_board(board_id)
         if stored is None:
             raise BoardNotFound(f"no board {board_id!r}")
-        part, after = _decode_export_cursor(cursor) if cursor else ("entries", None)
+        part, after = decode_export_cursor(cursor) if cursor else ("entries", None)
         lines: list[ExportLine] = []
         if cursor is None:
             lines.append(ExportedBoard(exported_at=self.clock(), board=stored.board))
@@ -731,14 +723,14 @@ class LeaderboardService:
             # Models read from the store, already valid: put in the line as they are.
             lines.extend(ExportedEntry.model_construct(entry=entry) for entry in entries)
             more = len(entries) == EXPORT_ENTRIES
-            next_cursor = _export_cursor("entries", entries[-1].rank_key) if more else (
-                _export_cursor("submissions", None))
+            next_cursor = export_cursor("entries", entries[-1].rank_key) if more else (
+                export_cursor("submissions", None))
             return ExportPage(lines=lines, next_cursor=next_cursor)
         page = self.store.stored_submissions(board_id, after, EXPORT_SUBMISSIONS)
         # Each record goes out as the JSON it was stored as (it was validated when pushed).
         lines.extend(StoredSubmissionLine.of(s, raw) for s, raw in page.submissions)
         return ExportPage(lines=lines,
-                          next_cursor=_export_cursor("submissions", page.after) if page.after else None)
+                          next_cursor=export_cursor("submissions", page.after) if page.after else None)
 
     def import_board(self, board: Board, caller: Caller = LOCAL_ORGANISER) -> tuple[BoardView, bool]:
         """Create the exported board unless a board with its id exists (then that board's own
@@ -752,10 +744,10 @@ class LeaderboardService:
         existing = self.store.get_board(board.board_id)
         if existing is not None:
             self._live(board.board_id, existing)
-            return _board_view(existing, now), False
+            return board_view(existing, now), False
         stored = self.store.create_board(board)
         self._audit(board.board_id, "import", caller, detail="board")
-        return _board_view(stored, now), stored.board == board
+        return board_view(stored, now), stored.board == board
 
     def import_submission(self, board_id: str, item: ImportedSubmission,
                           caller: Caller = LOCAL_ORGANISER) -> ImportReceipt:
@@ -838,7 +830,7 @@ def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission
     entry = Entry(
         board_id=board.board_id, racer=record.racer, racer_key=key,
         model_name=record.model_name, submission_id=record.submission_id,
-        achieved_at=at, score=score, design=_design(record), score_key=score_key,
+        achieved_at=at, score=score, design=design_of(record), score_key=score_key,
         rank_key=ranking.rank_key(score_key, at, key),
     )
     return submission, entry
