@@ -17,6 +17,7 @@ import glob
 import json
 import os
 import platform
+import re
 import shutil
 import socket
 import subprocess
@@ -82,11 +83,15 @@ def lambda_environment(function: str, table: str, task_root: Path) -> dict[str, 
     variables the Lambda runtime sets itself (which, e.g., switch Powertools' tracer on)."""
     document = template()
     defaults = {name: str(p.get("Default", "")) for name, p in document["Parameters"].items()}
-    names = defaults | {"BoardTable": table, "ArchiveBucket": ARCHIVE_BUCKET}
+    names = defaults | {"BoardTable": table, "ArchiveBucket": ARCHIVE_BUCKET,
+                        "RacerPool": "us-east-1_Bench0000", "CliClient": "benchclient",
+                        "RacerSignInDomain": "drboard-bench", "AWS::Region": "us-east-1"}
 
     def value(raw: Any) -> str:
         if isinstance(raw, dict) and set(raw) == {"Ref"}:
             return names[raw["Ref"]]
+        if isinstance(raw, dict) and set(raw) == {"Fn::Sub"}:
+            return re.sub(r"\$\{([^}]+)\}", lambda name: names[name[1]], raw["Fn::Sub"])
         assert isinstance(raw, str | int | float | bool), f"unsupported template value {raw!r}"
         return str(raw).lower() if isinstance(raw, bool) else str(raw)
 
