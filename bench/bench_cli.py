@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -26,7 +25,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
-from figures import Report, p50_p95
+from figures import Report, drboard_command, p50_p95
 
 START_RATIO_MAX = 1.5
 FLOOR = "python -c 'import click, rich'"
@@ -38,19 +37,6 @@ class Case:
     argv: list[str]
     exit_code: int = 0
     target: bool = True  # held to START_RATIO_MAX, else shown for information
-
-
-def drboard_command(explicit: str | None) -> list[str]:
-    """The `drboard` a user runs: the console script beside this Python, else the one on PATH."""
-    if explicit:
-        return [explicit]
-    beside = Path(sys.executable).parent / "drboard"
-    if beside.exists():
-        return [str(beside)]
-    found = shutil.which("drboard")
-    if found:
-        return [found]
-    raise SystemExit("no drboard command found: pip install -e . (or give --drboard PATH)")
 
 
 def cases(drboard: list[str]) -> list[Case]:

@@ -19,7 +19,6 @@ import json
 import os
 import platform
 import random
-import shutil
 import sqlite3
 import statistics
 import subprocess
@@ -40,7 +39,7 @@ from drboard_functions.service import LeaderboardService, racer_key
 from drboard_functions.stores import rank_buckets
 from drboard_functions.stores.sqlite import SqliteStore
 from drboard_functions.views import design_of
-from figures import Report, p50_p95, timed_ms
+from figures import Report, drboard_command, p50_p95, timed_ms
 
 TRACK = "reInvent2019_track"  # "reInvent2019" resolves to it; its board id is the same
 BOARD_ID = TRACK
@@ -288,16 +287,8 @@ def _rows_read(path: Path, score_key: str) -> tuple[int, int]:
 # ---- 3: the whole `drboard pull` command --------------------------------------------------------
 
 
-def drboard_command(explicit: str | None) -> list[str]:
-    if explicit:
-        return [explicit]
-    beside = Path(sys.executable).parent / "drboard"
-    if beside.exists():
-        return [str(beside)]
-    found = shutil.which("drboard")
-    if found:
-        return [found]
-    return [sys.executable, "-c", "from drboard_cli.main import cli; cli()"]
+#: The CLI run in-process, where no `drboard` script is installed.
+CLI_IN_PYTHON = [sys.executable, "-c", "from drboard_cli.main import cli; cli()"]
 
 
 def bench_cli(report: Report, path: Path, label: str, runs: int, command: list[str]) -> None:
@@ -559,7 +550,7 @@ def run(args: argparse.Namespace, workdir: Path) -> Report:
     rng = random.Random(args.seed)
     factory = RecordFactory(rng)
     small, large = args.sizes
-    command = drboard_command(args.drboard)
+    command = drboard_command(args.drboard, CLI_IN_PYTHON)
     pull_p50: dict[int, float] = {}
     ranked: dict[str, Path] = {}
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 import statistics
 import sys
 import time
@@ -102,3 +103,19 @@ def timed_ms(call: Callable[[], Any]) -> float:
     start = time.perf_counter()
     call()
     return (time.perf_counter() - start) * 1000
+
+
+def drboard_command(explicit: str | None, fallback: list[str] | None = None) -> list[str]:
+    """The `drboard` a user runs: ``explicit``, else the console script beside this Python, else
+    the one on PATH, else ``fallback`` (none: stop, saying how to install it)."""
+    if explicit:
+        return [explicit]
+    beside = Path(sys.executable).parent / "drboard"
+    if beside.exists():
+        return [str(beside)]
+    found = shutil.which("drboard")
+    if found:
+        return [found]
+    if fallback is None:
+        raise SystemExit("no drboard command found: pip install -e . (or give --drboard PATH)")
+    return fallback
