@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.test_serve import EXAMPLES, Served, _serve
+from tests.e2e.test_serve import EXAMPLES, Served
 
 sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright is not installed")
 expect = sync_api.expect
@@ -49,14 +49,6 @@ def new_page(browser: Any) -> Iterator[Any]:
 
     yield open_page
     context.close()
-
-
-@pytest.fixture
-def served(tmp_path: Path) -> Iterator[Served]:
-    board = _serve(tmp_path, db=tmp_path / "event.db")
-    yield board
-    if board.process.poll() is None:
-        board.stop()
 
 
 def shot(page: Any, name: str) -> None:

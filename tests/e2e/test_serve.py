@@ -31,8 +31,6 @@ from drboard_functions.models import (
     ExportLine,
     ImportedSubmission,
 )
-from drboard_functions.service import LeaderboardService
-from drboard_functions.stores.sqlite import SqliteStore
 
 from tests.integration.dynamodb_local import DynamoDbLocal
 from tests.recordkit import make_record
@@ -300,18 +298,6 @@ def test_organiser_routes_answer_only_the_serving_computer(tmp_path: Path) -> No
 
 
 # ---- the organiser guard, in-process -----------------------------------------------------------
-
-
-@pytest.fixture
-def server() -> Iterator[BoardServer]:
-    store = SqliteStore(":memory:")
-    server = BoardServer(("127.0.0.1", 0), LeaderboardService(store))
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    yield server
-    server.shutdown()
-    server.server_close()
-    store.close()
 
 
 def _from(server: BoardServer, address: str, method: str, path: str,

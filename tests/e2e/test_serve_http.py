@@ -12,34 +12,18 @@ import signal
 import socket
 import sqlite3
 import subprocess
-import threading
 import time
-from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import pytest
 from drboard_cli.serve import IDLE_CONNECTION_S, MAX_BODY_BYTES, BoardServer
-from drboard_functions.service import LeaderboardService
-from drboard_functions.stores.sqlite import SqliteStore
 
 from tests.e2e.test_serve import DRBOARD, EXAMPLES, _serve
 from tests.recordkit import make_record
 
 BOARDS = [f"cup-{number}" for number in range(6)]
-
-
-@pytest.fixture
-def server(tmp_path: Path) -> Iterator[BoardServer]:
-    store = SqliteStore(tmp_path / "event.db")
-    server = BoardServer(("127.0.0.1", 0), LeaderboardService(store))
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    yield server
-    server.shutdown()
-    server.server_close()
-    store.close()
 
 
 def _connect(server: BoardServer) -> http.client.HTTPConnection:

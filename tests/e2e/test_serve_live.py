@@ -7,23 +7,13 @@ import http.client
 import json
 import urllib.error
 import urllib.request
-from collections.abc import Iterator
-from pathlib import Path
 from urllib.parse import urlsplit
 
 import pytest
 
-from tests.e2e.test_serve import EXAMPLES, Served, _serve
+from tests.e2e.test_serve import EXAMPLES, Served
 
 BOARD = "reInvent2019_track"
-
-
-@pytest.fixture
-def served(tmp_path: Path) -> Iterator[Served]:
-    board = _serve(tmp_path, db=tmp_path / "event.db")
-    yield board
-    if board.process.poll() is None:
-        board.stop()
 
 
 class EventStream:

@@ -27,7 +27,8 @@ from drboard_functions.models import BoardView, ExportedSubmission, ExportPage
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
-from moto import mock_aws
+
+from tests.awskit import REGION
 
 EVENTS = Path(__file__).parents[2] / "events"
 PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_racer.json",
@@ -36,7 +37,6 @@ ADMIN_EVENTS = ["admin_create_board.json", "admin_update_board.json", "admin_clo
                 "admin_delete_board.json", "admin_restore_board.json", "admin_import_board.json",
                 "admin_import_submission.json", "admin_export_board.json", "admin_remove_entry.json",
                 "admin_ban_racer.json", "admin_unban_racer.json", "admin_audit.json"]
-REGION = "eu-west-1"
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 
@@ -219,16 +219,6 @@ def test_no_other_function_answers_organiser_events(service: LeaderboardService,
 
 
 # ---- the cloud wiring, on moto -----------------------------------------------------------------
-
-
-@pytest.fixture
-def aws(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    monkeypatch.setenv("AWS_DEFAULT_REGION", REGION)
-    monkeypatch.setenv("AWS_ACCESS_KEY_ID", "testing")
-    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", "testing")
-    monkeypatch.delenv("AWS_PROFILE", raising=False)
-    with mock_aws():
-        yield
 
 
 def test_the_archive_writes_the_record_as_json(aws: None) -> None:

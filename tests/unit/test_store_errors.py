@@ -30,13 +30,12 @@ from drboard_functions.stores import dynamodb, sqlite
 from drboard_functions.stores.dynamodb import DynamoDbStore
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
-from moto import mock_aws
 from samtranslator.yaml_helper import yaml_parse
 
+from tests.awskit import REGION
 from tests.tablekit import create_board_table
 
 ROOT = Path(__file__).parents[2]
-REGION = "eu-west-1"
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 
@@ -118,16 +117,6 @@ def test_a_busy_store_answers_503_with_retry_after(kind: type[errors.StoreError]
 
 
 # ---- the cloud stores: throttling, timeouts, contention ----------------------------------------
-
-
-@pytest.fixture
-def aws(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    monkeypatch.setenv("AWS_DEFAULT_REGION", REGION)
-    monkeypatch.setenv("AWS_ACCESS_KEY_ID", "testing")
-    monkeypatch.setenv("AWS_SECRET_ACCESS_KEY", "testing")
-    monkeypatch.delenv("AWS_PROFILE", raising=False)
-    with mock_aws():
-        yield
 
 
 @pytest.fixture
