@@ -43,6 +43,7 @@ REFRESH_S = 30
 #: (tests/unit/test_web_pages.py checks every pair).
 BACKGROUND = "#0f1720"
 ROW_GLOW = {"fresh": "#173f2b", "improved": "#183a5a", "leader": "#453500"}
+GLOW_S = 8  # how long a marked row glows (the style's animation; the script keeps marks as long)
 TEXT = "#e6edf3"
 MUTED = "#9aa7b4"
 LINK = "#7cc4ff"
@@ -92,7 +93,7 @@ main.screen .qr svg{{width:12vw;height:12vw;max-width:22rem;max-height:22rem}}
               for rank, (fill, text) in MEDALS.items())
     + "".join(f".status.{status.value.lower()}{{background:{fill};color:{text}}}"
               for status, (fill, text) in STATUS_COLOURS.items())
-    + "".join(f"tr.{name} td{{--glow:{colour};animation:glow 8s ease-out}}"
+    + "".join(f"tr.{name} td{{--glow:{colour};animation:glow {GLOW_S}s ease-out}}"
               for name, colour in ROW_GLOW.items())
 ).strip()
 
@@ -102,8 +103,8 @@ LIVE_SCRIPT = """
   const main = document.querySelector("main[data-board]");
   if (!main || !window.fetch) return;
   const say = (text) => { const el = document.getElementById("live"); if (el) el.textContent = text; };
-  const POLL_MS = 3000, STREAMED_POLL_MS = 30000, GLOW_MS = 8000;
-  const marks = new Map();  // "fresh|improved|leader <racer>" -> when marked (GLOW_MS: the style's glow)
+  const POLL_MS = 3000, STREAMED_POLL_MS = 30000, GLOW_MS = @GLOW_MS@;
+  const marks = new Map();  // "fresh|improved|leader <racer>" -> when marked
   let etag = main.dataset.etag || null, busy = false, streamed = false;
   const rows = () => new Map([...main.querySelectorAll("tr[data-racer]")]
     .map((row) => [row.dataset.racer, row]));
@@ -189,7 +190,7 @@ LIVE_SCRIPT = """
   listen();
   if (main.classList.contains("screen")) scroll();
 })();
-""".strip()
+""".strip().replace("@GLOW_MS@", str(GLOW_S * 1000))
 LIVE_SCRIPT_HASH = "sha256-" + base64.b64encode(hashlib.sha256(LIVE_SCRIPT.encode()).digest()).decode()
 
 
