@@ -46,32 +46,39 @@ from .errors import (
 )
 from .identity import LOCAL_ORGANISER, Caller
 from .insights import design_facts, differences, shared_facts
-from .models import (
+from .models.domain import (
     BOARD_ID_PATTERN,
     MAX_PAGE,
     AliasClaim,
     AuditAction,
     AuditEvent,
-    AuditPage,
     Board,
-    BoardChanges,
-    BoardList,
-    BoardPage,
     BoardRules,
-    BoardSpec,
     BoardStatus,
-    BoardView,
-    ComparedRacer,
-    Comparison,
     Entry,
-    EntryView,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    run_mismatches,
+)
+from .models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from .models.transfer import (
     ExportedBoard,
     ExportedEntry,
     ExportLine,
     ExportPage,
-    HistoryItem,
-    ImportedSubmission,
     ImportReceipt,
+    StoredSubmissionLine,
+)
+from .models.views import (
+    AuditPage,
+    BoardList,
+    BoardPage,
+    BoardView,
+    ComparedRacer,
+    Comparison,
+    EntryView,
+    HistoryItem,
     Insights,
     Me,
     Moderation,
@@ -79,13 +86,8 @@ from .models import (
     RacerHistory,
     RacerStatus,
     RacerSummary,
-    RacerTally,
     RacerView,
     SpeedPoint,
-    StoredSubmissionLine,
-    Submission,
-    SubmissionLimits,
-    run_mismatches,
 )
 from .stores.base import (
     AliasConflict,

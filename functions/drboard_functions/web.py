@@ -26,16 +26,8 @@ from .display import DASH, PRIVATE_DESIGN, duration, gap, method_label, percent,
 from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, design_facts, fact_text
-from .models import (
-    BoardPage,
-    BoardStatus,
-    BoardView,
-    Comparison,
-    Design,
-    EntryView,
-    Insights,
-    RacerView,
-)
+from .models.domain import BoardStatus, Design
+from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
 REFRESH_S = 30
 

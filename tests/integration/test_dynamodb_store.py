@@ -12,7 +12,7 @@ from typing import Any
 import boto3
 import pytest
 from drboard_functions.errors import SubmissionLimitReached, TooSoon
-from drboard_functions.models import BoardSpec
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores import dynamodb
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item

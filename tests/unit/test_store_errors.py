@@ -23,7 +23,7 @@ from drboard_assembler.record import Record
 from drboard_cli.serve import LocalContext, _refused
 from drboard_functions import errors, services
 from drboard_functions.handlers import push, wiring
-from drboard_functions.models import BoardList
+from drboard_functions.models.views import BoardList
 from drboard_functions.routes import ERROR_STATUS, build_app, pull_router
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores import dynamodb, sqlite

@@ -55,7 +55,7 @@ from drboard_assembler.record import Record
 
 from .. import ranking
 from ..errors import BoardNotFound, StoreBusy
-from ..models import (
+from ..models.domain import (
     AliasClaim,
     AuditEvent,
     Board,
