@@ -38,7 +38,7 @@ BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardM
 FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
                             "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
-                            "StoreUnavailable"})
+                            "StoreUnavailable", "StoreFailed"})
 
 
 @cache

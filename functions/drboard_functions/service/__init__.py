@@ -25,10 +25,11 @@ from .boards import (
     racer_key,
     utc_now,
 )
+from .copies import evaluation_fingerprints
 from .managing import Managing
 from .moderating import Moderating
 from .paging import DEFAULT_PAGE
-from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
+from .pushing import Pushing, check_record_size, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
 from .transfer import Transfer
 

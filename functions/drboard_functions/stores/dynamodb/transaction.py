@@ -19,19 +19,37 @@ from botocore.exceptions import ClientError
 from drboard_assembler.record import Record
 
 from ... import ranking
-from ...errors import BoardNotFound, StoreBusy
-from ...models.domain import AuditEvent, Entry, Submission, SubmissionLimits, WriteOutcome
-from ..aws_errors import cancellation_codes, code_of
-from ..base import FingerprintTaken, LimitReached
+from ...errors import BoardNotFound, StoreBusy, StoreUnavailable
+from ...models.domain import (
+    AliasClaim,
+    AuditEvent,
+    Entry,
+    RunPrint,
+    Submission,
+    SubmissionLimits,
+    WriteOutcome,
+)
+from ..aws_errors import UNAVAILABLE_RETRY_AFTER_S, cancellation_codes, code_of, store_error
+from ..base import AliasConflict, BoardChanged, FingerprintTaken, LimitReached, LookalikeTaken
 from .codecs import (
+    ALIAS_PARTITION,
+    BANS_SK,
     BOARD_SK,
+    EVENT_PARTITION,
+    alias_items,
     audit_item,
+    author_sk,
     entry_item,
     fingerprint_item,
     fingerprint_sk,
     key,
+    near_item,
     record_item,
+    run_partition,
+    skeleton_item,
+    skeleton_sk,
     submission_item,
+    submission_sk,
     tally_sk,
     text,
 )
@@ -67,16 +85,37 @@ class Slots:
                 if code == FAILED}
 
 
+def settings_condition(version: int) -> tuple[str, dict[str, AttributeValueTypeDef]]:
+    """The board item's condition that its settings are still at ``version`` (a board from
+    before settings versions is at 0)."""
+    if version == 0:
+        return "attribute_not_exists(settings_version) OR settings_version = :settings", {
+            ":settings": {"N": "0"}}
+    return "settings_version = :settings", {":settings": {"N": str(version)}}
+
+
+def bans_condition(version: int) -> tuple[str, dict[str, AttributeValueTypeDef]]:
+    """The event bans item's condition that they are still at ``version`` (0: none yet)."""
+    if version == 0:
+        return "attribute_not_exists(sk)", {}
+    return "version = :bans", {":bans": {"N": str(version)}}
+
+
 def board_change(table: str, board_id: str, change: int,
-                 generation: str | None) -> TransactWriteItemTypeDef:
+                 generation: str | None, settings: int | None = None) -> TransactWriteItemTypeDef:
     """The board's number of racers changed by ``change``, and its version bumped, on
-    condition that its rank counters are still those of ``generation`` (None: none)."""
+    condition that its rank counters are still those of ``generation`` (None: none) and, when
+    given, that its settings are still at version ``settings``."""
     values: dict[str, AttributeValueTypeDef] = {":change": {"N": str(change)}, ":one": {"N": "1"}}
     if generation is None:
         condition = "attribute_exists(sk) AND attribute_not_exists(rank_generation)"
     else:
         condition = "rank_generation = :generation"
         values[":generation"] = text(generation)
+    if settings is not None:
+        unchanged, more = settings_condition(settings)
+        condition = f"({condition}) AND ({unchanged})"
+        values |= more
     return {"Update": {
         "TableName": table, "Key": key(board_id, BOARD_SK),
         "UpdateExpression": "SET participants = participants + :change ADD board_version :one",
@@ -86,7 +125,8 @@ def board_change(table: str, board_id: str, change: int,
 class PushTransaction:
     def __init__(self, store: DynamoDbStore, submission: Submission, record: Record, entry: Entry,
                  limits: SubmissionLimits | None, fingerprints: Sequence[str],
-                 audit: AuditEvent | None) -> None:
+                 audit: AuditEvent | None, *, runs: Sequence[RunPrint] = (),
+                 claim: AliasClaim | None = None, skeleton: str | None = None) -> None:
         self.store = store
         self.table = store.table
         self.submission = submission
@@ -95,6 +135,9 @@ class PushTransaction:
         self.limits = limits
         self.fingerprints = fingerprints
         self.audit = audit
+        self.runs = runs
+        self.claim = claim
+        self.skeleton = skeleton
 
     def run(self) -> WriteOutcome:
         board_id, racer = self.entry.board_id, self.entry.racer_key
@@ -107,22 +150,30 @@ class PushTransaction:
             current = self.store.get_entry(board_id, racer)
             slots = self._slots(current, generation)
             try:
-                self.store.client.transact_write_items(TransactItems=slots.items)
+                self._commit(slots)
             except ClientError as error:
                 if code_of(error) != "TransactionCanceledException":
                     raise
                 failed = slots.failed(error)
                 if "submission" in failed:
                     return self._duplicate()
+                if "settings" in failed or "bans" in failed:
+                    raise BoardChanged(board_id) from None
                 if "tally" in failed:
                     raise LimitReached(self.store.tally(board_id, racer)) from None
                 if "fingerprint" in failed:
                     raise FingerprintTaken(self._copied_from()) from None
+                if "skeleton" in failed:
+                    raise LookalikeTaken(self._held(skeleton_sk(self.skeleton or ""))) from None
+                if "alias" in failed:
+                    raise AliasConflict(self._alias_holder()) from None
                 if "board" in failed:
-                    # No board, or its rank counters were built meanwhile.
+                    # No board, its rank counters were built meanwhile, or its settings changed.
                     exists, generation = self.store.ranks.generation(board_id)
                     if not exists:
                         raise BoardNotFound(f"no board {board_id!r}") from None
+                    if self._settings_moved():
+                        raise BoardChanged(board_id) from None
                     continue
                 if not failed and "TransactionConflict" not in cancellation_codes(error):
                     raise
@@ -130,6 +181,39 @@ class PushTransaction:
             return self._stored(current)
         raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up after {MAX_ATTEMPTS} "
                         "attempts, nothing was stored; try again in a moment")
+
+    def _commit(self, slots: Slots) -> None:
+        """Write the transaction. A failure that does not say whether it was written (a
+        timeout, a lost connection, throttling or an error reported after the write) is
+        settled by reading the submission back: stored means committed (the answer is then
+        the write's, not an error); not stored means nothing was written."""
+        try:
+            self.store.client.transact_write_items(TransactItems=slots.items)
+        except Exception as error:
+            if isinstance(error, ClientError) and code_of(error) in (
+                    "TransactionCanceledException", "ValidationException"):
+                raise
+            if store_error(error, "the board's table") is None and not isinstance(error, ClientError):
+                raise
+            written = self._written()
+            if written is None:
+                raise StoreUnavailable(
+                    "the board's table did not say whether it stored the run: push it again "
+                    "(a run already stored is answered as a duplicate, with its rank)",
+                    UNAVAILABLE_RETRY_AFTER_S) from error
+            if not written:
+                raise
+
+    def _written(self) -> bool | None:
+        """Whether this push's submission is stored (None: that cannot be read either)."""
+        try:
+            item = self.store.client.get_item(
+                TableName=self.table, ConsistentRead=True,
+                Key=key(self.submission.board_id,
+                        submission_sk(self.submission.racer_key, self.submission.submission_id)))
+        except Exception:
+            return None
+        return "Item" in item
 
     def _slots(self, current: Entry | None, generation: str | None) -> Slots:
         board_id, entry = self.entry.board_id, self.entry
@@ -146,21 +230,83 @@ class PushTransaction:
             "ExpressionAttributeValues": {":me": text(entry.racer_key)}}} for f in self.fingerprints])
         if self.audit is not None:
             slots.add("audit", {"Put": {"TableName": self.table, "Item": audit_item(self.audit)}})
+        self._add_claims(slots)
+        settings = self.limits.settings_version if self.limits is not None else None
         if current is None:
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "attribute_not_exists(sk)"}})
-            slots.add("board", board_change(self.table, board_id, +1, generation))
+            slots.add("board", board_change(self.table, board_id, +1, generation, settings))
         elif entry.rank_key < current.rank_key:
             # Exactly the entry read: the counters take its score off.
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "rank_key = :seen",
                                         "ExpressionAttributeValues": {":seen": text(current.rank_key)}}})
-            slots.add("board", board_change(self.table, board_id, 0, generation))
+            slots.add("board", board_change(self.table, board_id, 0, generation, settings))
         else:
+            if settings is not None:  # the entry stays: the board's settings are checked alone
+                condition, values = settings_condition(settings)
+                slots.add("settings", {"ConditionCheck": {
+                    "TableName": self.table, "Key": key(board_id, BOARD_SK),
+                    "ConditionExpression": condition, "ExpressionAttributeValues": values}})
             return slots  # not better: the entry stays as it is (entries only ever improve)
         slots.extend("counters", self.store.ranks.changes(
             board_id, generation, entry.score_key, current.score_key if current else None))
         return slots
+
+    def _add_claims(self, slots: Slots) -> None:
+        """The event's bans unchanged, the alias's claim, the skeleton held on the board, and
+        the runs indexed for every board, in the push's own transaction."""
+        board_id, racer = self.entry.board_id, self.entry.racer_key
+        if self.limits is not None and self.limits.bans_version is not None:
+            condition, values = bans_condition(self.limits.bans_version)
+            check: dict[str, Any] = {"TableName": self.table, "Key": key(EVENT_PARTITION, BANS_SK),
+                                     "ConditionExpression": condition}
+            if values:
+                check["ExpressionAttributeValues"] = values
+            slots.add("bans", {"ConditionCheck": check})
+        if self.claim is not None:
+            slots.extend("alias", [{"Put": {"TableName": self.table, "Item": item,
+                                            "ConditionExpression": "attribute_not_exists(sk)"}}
+                                   for item in alias_items(self.claim)])
+        if self.skeleton is not None:
+            slots.add("skeleton", {"Put": {
+                "TableName": self.table, "Item": skeleton_item(board_id, self.skeleton, racer),
+                "ConditionExpression": "attribute_not_exists(sk) OR racer_key = :me",
+                "ExpressionAttributeValues": {":me": text(racer)}}})
+        at = text(ranking.timestamp(self.submission.submitted_at))
+        for run in self.runs:
+            slots.add("run", {"Update": {
+                "TableName": self.table,
+                "Key": key(run_partition(run.fingerprint), author_sk(racer)),
+                "UpdateExpression": "SET first_at = if_not_exists(first_at, :at), "
+                                    "board_id = if_not_exists(board_id, :board), "
+                                    "submission_id = if_not_exists(submission_id, :submission), "
+                                    "racer_key = :racer",
+                "ExpressionAttributeValues": {
+                    ":at": at, ":board": text(board_id), ":racer": text(racer),
+                    ":submission": text(self.submission.submission_id)}}})
+            if run.laps_ms:
+                slots.add("near", {"Put": {"TableName": self.table,
+                                           "Item": near_item(run, self.submission)}})
+
+    def _settings_moved(self) -> bool:
+        if self.limits is None or self.limits.settings_version is None:
+            return False
+        stored = self.store.get_board(self.entry.board_id)
+        return stored is None or stored.settings_version != self.limits.settings_version
+
+    def _held(self, sk: str) -> str:
+        item = self.store.get_item(self.entry.board_id, sk)
+        return item["racer_key"]["S"] if item else "another racer"
+
+    def _alias_holder(self) -> AliasClaim:
+        claim = self.claim
+        assert claim is not None
+        for sk in (f"K#{claim.racer_key}", f"P#{claim.principal}"):
+            holder = self.store.get_item(ALIAS_PARTITION, sk)
+            if holder is not None:
+                return AliasClaim.model_validate_json(holder["data"]["S"])
+        return claim
 
     def _count_submission(self) -> Any:
         """The tally's update, conditioned on the limits: the racer's last submission is old
