@@ -283,7 +283,7 @@ def racer_page(view: RacerView) -> str:
         body += f"<p>How this model was built is {PRIVATE_DESIGN}.</p>" + _history_section(view)
         return _document(f"{view.racer} · {board.title} · drboard", view.racer,
                          f"{standing} · {entry.model_name}", body + links)
-    run = record.best_run
+    run = view.scored_run or record.best_run
     body += "<section><h2>Laps of the best evaluation run</h2>" + charts.bars(
         f"Lap times of {view.racer}'s best run",
         f"{len(run.laps)} laps of {run.source}; dim bars did not finish "

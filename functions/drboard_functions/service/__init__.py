@@ -5,8 +5,9 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading) and ``transfer`` (export and import). :class:`LeaderboardService` only hands
-each call to the room that answers it.
+trail's reading), ``transfer`` (export, import and a board's recheck) and ``aliases`` (the
+organisers' hand on racers' aliases); ``copies`` holds the rules of copied runs.
+:class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from collections.abc import Callable
 from typing import Any, Concatenate, ParamSpec, TypeVar
 
 from ..stores.base import BoardStore, RecordArchive
+from .aliases import Aliases
 from .boards import (
     CUSTOM_PREFIX,
     BoardKeeper,
@@ -70,6 +72,7 @@ class LeaderboardService:
         self._managing = Managing(keeper)
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
+        self._aliases = Aliases(keeper)
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)
@@ -100,3 +103,9 @@ class LeaderboardService:
     export_page = _handed_to("_transfer", Transfer.export_page)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
+    recheck_page = _handed_to("_transfer", Transfer.recheck_page)
+
+    assign_alias = _handed_to("_aliases", Aliases.assign_alias)
+    release_alias = _handed_to("_aliases", Aliases.release_alias)
+    aliases = _handed_to("_aliases", Aliases.aliases)
+    alias_audit = _handed_to("_aliases", Aliases.alias_audit)

@@ -6,8 +6,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from datetime import datetime, timedelta
 
-from drboard_assembler.record import Record
+from drboard_assembler.record import EvaluationRun, Record
 
+from .. import ranking
 from ..cursors import RankCursor, decode_page_cursor, page_cursor
 from ..errors import DesignsPrivate, InvalidQuery, RacerNotFound
 from ..insights import design_facts, differences, shared_facts
@@ -36,6 +37,16 @@ MAX_COMPARED = 4
 DEFAULT_TOP, MAX_TOP = 5, 20
 #: Insights read this many of a board's entries (and their records) as the field.
 INSIGHTS_FIELD = 100
+
+
+def scored_run(record: Record, entry: Entry, board: Board) -> EvaluationRun:
+    """The evaluation run of the record that the entry's score comes from (the one the board's
+    timing method scored, not merely the fastest lap's)."""
+    named = [run for run in record.evaluations if run.source == entry.score.run]
+    if len(named) == 1:
+        return named[0]
+    return min(named or record.evaluations,
+               key=lambda run: ranking.score_key(ranking.score_run(run, board.rules)))
 
 
 class Reading:
@@ -114,6 +125,7 @@ class Reading:
             history=[history_item(s, entry) for s in submissions],
             record=record if shown else None,
             next_cursor=page_cursor("history", after),
+            scored_run=scored_run(record, entry, stored.board) if shown else None,
         )
 
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
