@@ -79,7 +79,7 @@ def _emit(page: Any, fmt: str, output: Path | None) -> None:
         elif page.entries:
             out().print(render.board_table(page, out().width))
         else:
-            out().print(f"{page.board.title}: no entries yet.")
+            out().print(f"{page.board.title}: no entries yet.", markup=False)
         return
     text = {"json": render.board_json, "csv": render.board_csv,
             "markdown": render.board_markdown}[fmt](page)
@@ -192,7 +192,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
         elif items:
             out().print(render.history_table(name, items))
         else:
-            out().print(f"No submissions by {name} yet.")
+            out().print(f"No submissions by {name} yet.", markup=False)
 
 
 @click.command()

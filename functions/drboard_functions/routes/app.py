@@ -123,7 +123,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
-    (StoreFailed, HTTPStatus.INTERNAL_SERVER_ERROR),
+    (StoreFailed, HTTPStatus.BAD_GATEWAY),
     (StoreBusy, HTTPStatus.SERVICE_UNAVAILABLE),
     (StoreUnavailable, HTTPStatus.SERVICE_UNAVAILABLE),
     (StoreError, HTTPStatus.SERVICE_UNAVAILABLE),
@@ -142,7 +142,7 @@ def status_of(error: DomainError) -> HTTPStatus:
 
 def error_headers(error: DomainError) -> dict[str, str] | None:
     """The headers an error answer carries: Retry-After for a cooldown and a busy store."""
-    if isinstance(error, TooSoon | StoreError) and not isinstance(error, StoreFailed):
+    if isinstance(error, TooSoon | StoreError):
         return {"Retry-After": str(max(0, error.retry_after_s))}
     return None
 
