@@ -68,7 +68,9 @@ def confusable_skeleton(alias: str) -> str:
     two aliases with one skeleton could pass for each other in print."""
     from disarm import skeleton_key
 
-    return skeleton_key(alias_key(alias), digit_policy="tr39") or alias_key(alias)
+    # Before any case folding: ``I`` passes for ``l`` only while it is a capital.
+    spelled = " ".join(unicodedata.normalize("NFKC", alias).split())
+    return skeleton_key(spelled, digit_policy="tr39") or alias_key(alias)
 
 
 def text_problem(text: str) -> str | None:

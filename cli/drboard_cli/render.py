@@ -263,12 +263,18 @@ def board_markdown(page: BoardPage) -> str:
     for entry in page.entries:
         cells = [str(entry.rank), entry.racer, entry.model_name, _time_label(entry),
                  gap(entry.gap_ms), str(entry.laps_completed), design_summary(entry.design)]
-        lines.append("| " + " | ".join(printable(c).replace("|", "\\|") for c in cells) + " |")
-    return "\n".join(lines) + "\n"
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+    return printable("\n".join(lines) + "\n")
 
 
 def board_json(page: BoardPage) -> str:
-    return page.model_dump_json(indent=2) + "\n"
+    return json_text(page.model_dump_json(indent=2) + "\n")
+
+
+def json_text(text: str) -> str:
+    """JSON text as a terminal may show it: a control or bidirectional character inside a
+    string is written as its ``\\uXXXX`` escape (the same JSON once parsed)."""
+    return printable(text)
 
 
 # ---- push, history, show ---------------------------------------------------------------------

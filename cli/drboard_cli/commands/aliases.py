@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import IO
 
 import click
 
@@ -51,7 +52,7 @@ def aliases_list(ctx: Context, fmt: str) -> None:
 @click.option("--file", "source", type=click.File("r", encoding="utf-8"),
               help="Also each alias of this file, one a line (`-` for standard input).")
 @pass_context
-def aliases_reserve(ctx: Context, names: tuple[str, ...], source: click.utils.LazyFile | None) -> None:
+def aliases_reserve(ctx: Context, names: tuple[str, ...], source: IO[str] | None) -> None:
     """Keep each ALIAS for its racer (a season's racers in one go).
 
     No one can claim a reserved alias: give it to the racer's sign-in with `drboard aliases

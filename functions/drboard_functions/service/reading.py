@@ -118,15 +118,16 @@ class Reading:
                 page = self.store.history_page(key, board_id,
                                                decode_page_cursor("history", cursor), limit)
             submissions, after = page.submissions, page.after
-        return RacerView(
-            board=self.keeper.view(stored),
-            racer=entry.racer,
-            entry=entry_view(entry, rank, self.keeper.leader(board_id), design=shown),
-            history=[history_item(s, entry) for s in submissions],
-            record=record if shown else None,
-            next_cursor=page_cursor("history", after),
-            scored_run=scored_run(record, entry, stored.board) if shown else None,
-        )
+        # The stored record goes in as it was stored: today's checks do not run on it again.
+        return RacerView.model_validate({
+            "board": self.keeper.view(stored),
+            "racer": entry.racer,
+            "entry": entry_view(entry, rank, self.keeper.leader(board_id), design=shown),
+            "history": [history_item(s, entry) for s in submissions],
+            "record": record if shown else None,
+            "next_cursor": page_cursor("history", after),
+            "scored_run": scored_run(record, entry, stored.board) if shown else None,
+        }, context={"stored": True})
 
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
         """The racers' designs side by side, and the facts they differ on."""

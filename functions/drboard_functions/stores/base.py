@@ -87,10 +87,11 @@ class SubmissionPage(NamedTuple):
 
 
 def stored_record(raw: str | bytes) -> Record:
-    """A record read back from the board's own store: every field is validated, but its content
-    hash, checked when the record was stored, is not recomputed (the record's own build skips
-    it the same way); that hash is most of the cost of reading a record."""
-    return Record.model_validate_json(raw, context={"draft": True})
+    """A record read back from the board's own store, as it was stored: its shape is validated,
+    but none of today's checks run again (the catalog, the lap floors, the alias and text rules,
+    its content hash — see ``drboard_assembler.record.stored``), so a tightened rule never
+    breaks a read; `drboard board recheck` flags the records it would refuse."""
+    return Record.model_validate_json(raw, context={"stored": True})
 
 
 class BadPageToken(ValueError):

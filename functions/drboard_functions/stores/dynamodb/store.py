@@ -96,6 +96,7 @@ if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
     from mypy_boto3_dynamodb.type_defs import (
         AttributeValueTypeDef,
+        PutItemInputTypeDef,
         QueryInputTypeDef,
         TransactWriteItemTypeDef,
     )
@@ -312,12 +313,14 @@ class DynamoDbStore:
 
     def save_event_bans(self, bans: EventBans, version: int) -> int:
         condition, values = bans_condition(version)
+        request: PutItemInputTypeDef = {
+            "TableName": self.table, "ConditionExpression": condition,
+            "Item": {**key(EVENT_PARTITION, BANS_SK), "data": text(bans.model_dump_json()),
+                     "version": {"N": str(version + 1)}}}
+        if values:
+            request["ExpressionAttributeValues"] = values
         try:
-            self.client.put_item(
-                TableName=self.table,
-                Item={**key(EVENT_PARTITION, BANS_SK), "data": text(bans.model_dump_json()),
-                      "version": {"N": str(version + 1)}},
-                ConditionExpression=condition, **({"ExpressionAttributeValues": values} if values else {}))
+            self.client.put_item(**request)
         except ClientError as error:
             if code_of(error) != "ConditionalCheckFailedException":
                 raise

@@ -57,7 +57,11 @@ from .ranks import LAZY_BUILD_MAX_RACERS
 from .retries import MAX_ATTEMPTS, backoff
 
 if TYPE_CHECKING:
-    from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef, TransactWriteItemTypeDef
+    from mypy_boto3_dynamodb.type_defs import (
+        AttributeValueTypeDef,
+        ConditionCheckTypeDef,
+        TransactWriteItemTypeDef,
+    )
 
     from .store import DynamoDbStore
 
@@ -259,8 +263,9 @@ class PushTransaction:
         board_id, racer = self.entry.board_id, self.entry.racer_key
         if self.limits is not None and self.limits.bans_version is not None:
             condition, values = bans_condition(self.limits.bans_version)
-            check: dict[str, Any] = {"TableName": self.table, "Key": key(EVENT_PARTITION, BANS_SK),
-                                     "ConditionExpression": condition}
+            check: ConditionCheckTypeDef = {"TableName": self.table,
+                                            "Key": key(EVENT_PARTITION, BANS_SK),
+                                            "ConditionExpression": condition}
             if values:
                 check["ExpressionAttributeValues"] = values
             slots.add("bans", {"ConditionCheck": check})
