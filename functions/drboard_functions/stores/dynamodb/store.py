@@ -258,7 +258,7 @@ class DynamoDbStore:
     def index_submission(self, submission: Submission, runs: Sequence[RunPrint],
                          fingerprints: Sequence[str], skeleton: str | None) -> Indexed:
         for run in runs:
-            self._index_author(submission, run.fingerprint)
+            self.index_author(submission, run.fingerprint)
             if run.laps_ms:
                 self.client.put_item(TableName=self.table, Item=near_item(run, submission))
         holders = {}
@@ -273,7 +273,7 @@ class DynamoDbStore:
                 submission.board_id, skeleton, submission.racer_key))
         return Indexed(holders, lookalike)
 
-    def _index_author(self, submission: Submission, fingerprint: str) -> None:
+    def index_author(self, submission: Submission, fingerprint: str) -> None:
         """The racer's first time with the run: kept unless this one is earlier."""
         try:
             self.client.update_item(

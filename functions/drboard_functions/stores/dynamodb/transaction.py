@@ -15,11 +15,11 @@ from collections.abc import Sequence
 from datetime import timedelta
 from typing import TYPE_CHECKING, Any
 
-from botocore.exceptions import ClientError
+from botocore.exceptions import BotoCoreError, ClientError
 from drboard_assembler.record import Record
 
 from ... import ranking
-from ...errors import BoardNotFound, StoreBusy, StoreUnavailable
+from ...errors import BoardNotFound, StoreBusy, StoreError, StoreUnavailable
 from ...models.domain import (
     AliasClaim,
     AuditEvent,
@@ -38,14 +38,12 @@ from .codecs import (
     EVENT_PARTITION,
     alias_items,
     audit_item,
-    author_sk,
     entry_item,
     fingerprint_item,
     fingerprint_sk,
     key,
     near_item,
     record_item,
-    run_partition,
     skeleton_item,
     skeleton_sk,
     submission_item,
@@ -66,6 +64,7 @@ if TYPE_CHECKING:
     from .store import DynamoDbStore
 
 FAILED = "ConditionalCheckFailed"
+BATCH_WRITE_ITEMS = 25
 
 
 class Slots:
@@ -278,21 +277,6 @@ class PushTransaction:
                 "TableName": self.table, "Item": skeleton_item(board_id, self.skeleton, racer),
                 "ConditionExpression": "attribute_not_exists(sk) OR racer_key = :me",
                 "ExpressionAttributeValues": {":me": text(racer)}}})
-        at = text(ranking.timestamp(self.submission.submitted_at))
-        for run in self.runs:
-            slots.add("run", {"Update": {
-                "TableName": self.table,
-                "Key": key(run_partition(run.fingerprint), author_sk(racer)),
-                "UpdateExpression": "SET first_at = if_not_exists(first_at, :at), "
-                                    "board_id = if_not_exists(board_id, :board), "
-                                    "submission_id = if_not_exists(submission_id, :submission), "
-                                    "racer_key = :racer",
-                "ExpressionAttributeValues": {
-                    ":at": at, ":board": text(board_id), ":racer": text(racer),
-                    ":submission": text(self.submission.submission_id)}}})
-            if run.laps_ms:
-                slots.add("near", {"Put": {"TableName": self.table,
-                                           "Item": near_item(run, self.submission)}})
 
     def _settings_moved(self) -> bool:
         if self.limits is None or self.limits.settings_version is None:
@@ -344,9 +328,27 @@ class PushTransaction:
     def _stored(self, current: Entry | None) -> WriteOutcome:
         if self.limits is None:
             self._advance_last_submitted()
+        self._index_runs()
         if current is None or self.entry.rank_key < current.rank_key:
             return WriteOutcome(duplicate=False, improved=True, entry=self.entry)
         return WriteOutcome(duplicate=False, improved=False, entry=current)
+
+    def _index_runs(self) -> None:
+        """Index the runs for every board, once the push has committed (a record may hold 50
+        runs: their items would not fit the transaction). The push is stored whatever happens
+        here; a run left out is indexed by the board's next recheck."""
+        try:
+            for run in self.runs:
+                self.store.index_author(self.submission, run.fingerprint)
+            nears = [near_item(run, self.submission) for run in self.runs if run.laps_ms]
+            for start in range(0, len(nears), BATCH_WRITE_ITEMS):
+                pending: Any = {self.table: [{"PutRequest": {"Item": item}}
+                                             for item in nears[start:start + BATCH_WRITE_ITEMS]]}
+                while pending:
+                    pending = self.store.client.batch_write_item(
+                        RequestItems=pending).get("UnprocessedItems") or None
+        except (ClientError, BotoCoreError, StoreError):
+            pass
 
     def _advance_last_submitted(self) -> None:
         submission = self.submission
