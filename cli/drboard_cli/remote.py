@@ -149,9 +149,11 @@ class HttpBoard:
 
     # ---- the signed-in caller, moderation and audit ---------------------------------------
 
-    def join(self, code: str) -> Joined:
-        """Join a `drboard serve` board with its join code (the answer holds a new token)."""
-        return _parse(Joined, self._call("POST", "/join", body=JoinRequest(code=code)))
+    def join(self, code: str, renewing: str | None = None) -> Joined:
+        """Join a `drboard serve` board with its join code (the answer holds a new token);
+        ``renewing``, the token a racer holds already, keeps their sign-in (and alias)."""
+        return _parse(Joined, self._call("POST", "/join", body=JoinRequest.model_construct(code=code),
+                                         token=renewing))
 
     def me(self) -> Me:
         return _parse(Me, self._call("GET", "/me", signed=True))
@@ -194,9 +196,9 @@ class HttpBoard:
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: Mapping[str, str | list[str] | None] | None = None,
-              signed: bool = False) -> Answer:
+              signed: bool = False, token: str | None = None) -> Answer:
         given = {name: value for name, value in (query or {}).items() if value}
-        token = fresh_token(self.endpoint) if signed else None
+        token = token or (fresh_token(self.endpoint) if signed else None)
         prefix = tokens.route_prefix(token) if token else ""
         url = self.endpoint + prefix + path + (
             f"?{urllib.parse.urlencode(given, doseq=True)}" if given else "")

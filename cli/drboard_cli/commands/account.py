@@ -136,20 +136,33 @@ def whoami(ctx: Context) -> None:
 
 @click.command()
 @click.argument("code")
+@click.option("--endpoint", "endpoint_url", metavar="URL",
+              help="The board to join, as `drboard serve` shows it (the same as the global "
+                   "`drboard --endpoint URL join CODE`).")
 @pass_context
-def join(ctx: Context, code: str) -> None:
+def join(ctx: Context, code: str, endpoint_url: str | None) -> None:
     """Sign in to a `drboard serve` board with the join code its organiser shows.
 
-    Give the board with `--endpoint URL` (or `drboard configure --endpoint URL` first). The
-    token it answers is saved for that board in your user config folder, readable by you only.
+    Type it as `drboard serve` and the big screen show it: `drboard join CODE --endpoint URL`.
+    The token the board answers is saved for that board in your user config folder, readable
+    by you only, and the board becomes the one your commands use (`drboard push ./my-model`
+    pushes there; `drboard configure --local` goes back to your own board). Joining again
+    renews an expired token and keeps your racer alias.
     """
-    from .. import tokens
+    from .. import config, tokens
     from ..remote import HttpBoard
 
     with edge():
-        board = HttpBoard(_endpoint(ctx, "join CODE"))
-        joined = board.join(code)
+        if endpoint_url and not endpoint_url.startswith(("http://", "https://")):
+            raise click.UsageError("--endpoint must be an http:// URL, as `drboard serve` shows it")
+        board = HttpBoard(endpoint_url or _endpoint(ctx, "join CODE"))
+        held = tokens.load(board.endpoint)
+        joined = board.join(code, renewing=held.access_token if held and held.kind == "join" else None)
         tokens.save(board.endpoint, tokens.SavedToken(kind="join", access_token=joined.token,
-                                                      username=joined.principal))
-        out().print(f"Joined {board.endpoint} as {joined.principal}. Your first push claims your "
-                    "racer alias (or claim it now with `drboard alias NAME`).", soft_wrap=True)
+                                                      username=joined.principal,
+                                                      expires_at=joined.expires_at))
+        config.save_settings(endpoint=board.endpoint, stack_name=None)
+        again = "Renewed your join to" if joined.renewed else "Joined"
+        out().print(f"{again} {board.endpoint} as {joined.principal}; it is now the board your "
+                    "commands use. Push with `drboard push ./my-model`: your first push claims "
+                    "your racer alias (or claim it now with `drboard alias NAME`).", soft_wrap=True)
