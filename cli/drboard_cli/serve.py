@@ -487,6 +487,21 @@ def _bearer(headers: dict[str, str]) -> str | None:
     return token.strip() if scheme.lower() == "bearer" and token.strip() else None
 
 
+def _push_line(receipt: Any) -> str:
+    """``Ada pushed ada-v7 to club-final: 9.120 s, rank 2 of 12, new best (+0.465 s)``."""
+    from drboard_functions.display import gap, percent, seconds
+
+    pushed = receipt.submission
+    result = (seconds(pushed.time_ms) if pushed.qualified
+              else f"{percent(pushed.best_completion_pct)} done, not qualified")
+    outcome = ("already on the board" if receipt.status == "duplicate"
+               else "new best" if receipt.improved else "not better than their best")
+    if receipt.rank > 1 and receipt.entry.gap_ms is not None:
+        outcome += f", {gap(receipt.entry.gap_ms)} to the leader"
+    return (f"{receipt.entry.racer} pushed {pushed.model_name} to {receipt.board_id}: {result}, "
+            f"rank {receipt.rank} of {receipt.participants}, {outcome}")
+
+
 def _who(caller: Caller | None, address: str) -> str:
     if caller is None:
         return f"an unsigned client at {address}"

@@ -3,9 +3,8 @@ rules, how to push, the big screen's QR code."""
 
 from __future__ import annotations
 
-from datetime import UTC, datetime, timedelta
-
 import re
+from datetime import UTC, datetime, timedelta
 
 import pytest
 from drboard_functions import web

@@ -34,7 +34,6 @@ from .params import (
 from .responses import PAGE_RESPONSE, error_response, etag_headers, page_answer, page_etag, page_policy
 
 
-
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],
                  responses={200: PAGE_RESPONSE})
 def index_page(service: Service) -> Response[str]:
