@@ -290,8 +290,9 @@ def compare_page(comparison: Comparison, records: Sequence[Record | None] = ()) 
         group = "by_algorithm" if fact in by_algorithm else "choices" if differs else "same"
         rows[group].append({"label": label, "cells": values, "differs": differs})
     count = len(comparison.differences)
-    summary = (f"{' vs '.join(f'{c.racer} (#{c.entry.rank}, {_entry_result(c.entry)})' for c in comparison.racers)}"
-               f" · {count} design difference{'s' if count != 1 else ''}")
+    standings = " vs ".join(f"{c.racer} (#{c.entry.rank}, {_entry_result(c.entry)})"
+                            for c in comparison.racers)
+    summary = f"{standings} · {count} design difference{'s' if count != 1 else ''}"
     algorithms = sorted({fact_text("algorithm", c.facts.algorithm) for c in comparison.racers})
     return _render(
         "compare.html", title=f"{' vs '.join(names)} · {board.title} · drboard",

@@ -27,7 +27,7 @@ def _board_id(track: str | None, board: str | None) -> str:
 def _racer(racer: str | None) -> str:
     from .. import config
 
-    racer = racer or config.load_settings().get("racer")
+    racer = racer or config.default_racer()
     if not racer:
         raise click.UsageError("give --racer (no racer has pushed from this machine yet)")
     return str(racer)
