@@ -194,7 +194,7 @@ def audit(ctx: Context, board_id: str, fmt: str) -> None:
         if fmt == "json":
             out().print_json(data=[e.model_dump(mode="json") for e in events])
         else:
-            out().print(render.audit_table(board_id, events))
+            out().print(render.audit_table(board_id, events, out().width))
 
 
 @click.command(name="export")

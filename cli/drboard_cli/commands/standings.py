@@ -190,7 +190,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
         if fmt == "json":
             click.echo(render.write_json([i.model_dump(mode="json") for i in items]), nl=False)
         elif items:
-            out().print(render.history_table(name, items))
+            out().print(render.history_table(name, items, out().width))
         else:
             out().print(f"No submissions by {name} yet.")
 
@@ -232,4 +232,4 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
         if fmt == "json":
             click.echo(summary.model_dump_json(indent=2))
         else:
-            out().print(render.status_table(summary))
+            out().print(render.status_table(summary, out().width))
