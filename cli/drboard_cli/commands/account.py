@@ -89,8 +89,8 @@ def login(ctx: Context, use_password: bool, username: str | None, no_browser: bo
     http://localhost:8765/callback). With --no-browser (a headless machine), prints the
     address: sign in on any device, then paste here the address the browser ends on (it does
     not load, but holds the code) or the code alone. With --password, asks for your user name
-    and password here instead (an invited racer's temporary password is replaced by a new one). The token is saved
-    for that board in your user config folder, readable by you only, and renewed before it
+    and password here instead (an invited racer's temporary password is replaced by a new one).
+    The token is saved for that board in your user config folder, readable by you only, and renewed before it
     expires; `drboard logout` forgets it.
     """
     from .. import login as signing_in
