@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the tests package: DynamoDB Local and the table from the template
 
 from drboard_functions import ranking  # noqa: E402
-from drboard_functions.models import Board, Design, Entry, Score  # noqa: E402
+from drboard_functions.models.domain import Board, Design, Entry, Score  # noqa: E402
 from drboard_functions.service import LeaderboardService, racer_key  # noqa: E402
 from drboard_functions.stores.dynamodb import (  # noqa: E402
     RANK_INDEX,

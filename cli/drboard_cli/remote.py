@@ -23,21 +23,16 @@ from typing import Any, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
-from drboard_functions.models import (
-    MAX_PAGE,
-    AliasRequest,
+from drboard_functions.models.domain import MAX_PAGE, Board
+from drboard_functions.models.requests import AliasRequest, BoardChanges, BoardSpec, ImportedSubmission
+from drboard_functions.models.transfer import ExportPage, ImportReceipt
+from drboard_functions.models.views import (
     AuditPage,
-    Board,
-    BoardChanges,
     BoardList,
     BoardPage,
-    BoardSpec,
     BoardView,
     Comparison,
-    ExportPage,
     HistoryItem,
-    ImportedSubmission,
-    ImportReceipt,
     Insights,
     Me,
     Moderation,

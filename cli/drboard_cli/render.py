@@ -24,13 +24,11 @@ from drboard_functions.display import (
 )
 from drboard_functions.flags import DESCRIPTIONS
 from drboard_functions.insights import LABELS, fact_text
-from drboard_functions.models import (
-    AuditEvent,
+from drboard_functions.models.domain import AuditEvent, BoardStatus, Design
+from drboard_functions.models.views import (
     BoardPage,
-    BoardStatus,
     BoardView,
     Comparison,
-    Design,
     EntryView,
     HistoryItem,
     Insights,

@@ -331,7 +331,7 @@ class BoardServer:
         body = result.get("body") or ""
         pushed = method == "POST" and _PUSH_PATH.match(path)
         if pushed and status in (200, 201):
-            from drboard_functions.models import PushReceipt
+            from drboard_functions.models.views import PushReceipt
 
             from . import render
 

@@ -9,18 +9,15 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` imports no model
     from drboard_assembler.record import Record
-    from drboard_functions.models import (
+    from drboard_functions.models.domain import Board
+    from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
+    from drboard_functions.models.transfer import ExportPage, ImportReceipt
+    from drboard_functions.models.views import (
         AuditPage,
-        Board,
-        BoardChanges,
         BoardPage,
-        BoardSpec,
         BoardView,
         Comparison,
-        ExportPage,
         HistoryItem,
-        ImportedSubmission,
-        ImportReceipt,
         Insights,
         Me,
         Moderation,

@@ -11,7 +11,7 @@ from typing import Any
 from drboard_assembler.record import Record
 
 from .display import algorithm_name
-from .models import DesignFacts, SharedFact
+from .models.views import DesignFacts, SharedFact
 
 #: The facts insights summarise, with how people read them (in this order).
 LABELS = {

@@ -32,17 +32,8 @@ from .display import DASH, PRIVATE_DESIGN, duration, gap, method_label, percent,
 from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, algorithm_differences, design_facts, fact_text
-from .models import (
-    BoardPage,
-    BoardStatus,
-    BoardView,
-    Comparison,
-    Design,
-    EntryView,
-    Insights,
-    RacerView,
-    TimingMethod,
-)
+from .models.domain import BoardStatus, Design, TimingMethod
+from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
 if TYPE_CHECKING:
     from jinja2 import Environment

@@ -23,14 +23,8 @@ from drboard_cli import tokens
 from drboard_cli.remote import HttpBoard
 from drboard_cli.serve import BoardServer, http_event
 from drboard_functions import errors
-from drboard_functions.models import (
-    BoardChanges,
-    BoardSpec,
-    ExportedBoard,
-    ExportedSubmission,
-    ExportLine,
-    ImportedSubmission,
-)
+from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from drboard_functions.models.transfer import ExportedBoard, ExportedSubmission, ExportLine
 
 from tests.integration.dynamodb_local import DynamoDbLocal
 from tests.recordkit import make_record

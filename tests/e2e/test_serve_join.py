@@ -234,7 +234,7 @@ def test_network_racers_cannot_moderate_or_read_the_audit_trail(server: BoardSer
     [event] = trail["events"]
     assert event["action"] == "push" and event["actor"].startswith("join:")
     from drboard_cli import render
-    from drboard_functions.models import AuditEvent
+    from drboard_functions.models.domain import AuditEvent
 
     row = render.audit_detail(AuditEvent.model_validate(event | {"board_id": "reInvent2019_track"}))
     assert row.startswith("model ")

@@ -12,10 +12,10 @@ from typing import Any
 import boto3
 import pytest
 from drboard_functions.errors import SubmissionLimitReached, TooSoon
-from drboard_functions.models import BoardSpec
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService
-from drboard_functions.stores import dynamodb
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
+from drboard_functions.stores.dynamodb import transaction as push_transaction
 from moto import mock_aws
 
 from tests.contract.store_contract import TRACK, StoreContract, at, make_board, write_for
@@ -256,23 +256,23 @@ def test_a_board_from_before_the_counters_ranks_exactly_and_gets_them_on_its_nex
 
 def test_counting_a_board_that_changes_meanwhile_keeps_only_a_count_of_one_moment(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 0)  # the push below builds nothing
+    monkeypatch.setattr(push_transaction, "LAZY_BUILD_MAX_RACERS", 0)  # the push below builds nothing
     with mock_aws():
         client = boto3.client("dynamodb", region_name=REGION)
         table = new_table(client)
         seed_board(client, table, 50)
         builder, pusher = DynamoDbStore(table, client), DynamoDbStore(table, client)
         scans = []
-        real_query = builder._query
+        real_pages = builder.ranks._pages
 
-        def push_during_the_first_scan(request: Any, limit: int | None = None) -> Any:
-            items = real_query(request, limit)
+        def push_during_the_first_scan(request: Any) -> Any:
+            pages = list(real_pages(request))
             if request.get("IndexName") == "by_rank" and not scans:
                 scans.append(request)  # read, not yet counted: now an entry comes
                 LeaderboardService(pusher).push(make_record("Sneaky", [(9_000, 100)]))
-            return items
+            return iter(pages)
 
-        builder._query = push_during_the_first_scan  # type: ignore[method-assign]
+        builder.ranks._pages = push_during_the_first_scan  # type: ignore[method-assign]
         generation = builder.build_rank_counters(TRACK)
         assert generation is not None and scans
         # the push during the first count is in the counters the board took: the racers it
@@ -334,7 +334,7 @@ def test_a_rank_on_a_big_board_reads_three_counters(dynamodb_local: DynamoDbLoca
 
 def test_a_push_leaves_a_big_board_from_before_the_counters_to_an_explicit_build(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 100)
+    monkeypatch.setattr(push_transaction, "LAZY_BUILD_MAX_RACERS", 100)
     with mock_aws():
         client = boto3.client("dynamodb", region_name=REGION)
         table = new_table(client)

@@ -23,7 +23,8 @@ os.environ.setdefault("POWERTOOLS_TRACE_DISABLED", "true")
 import boto3
 from drboard_assembler.record import Record
 from drboard_functions.handlers import admin, pull, push, wiring
-from drboard_functions.models import BoardView, ExportedSubmission, ExportPage
+from drboard_functions.models.transfer import ExportedSubmission, ExportPage
+from drboard_functions.models.views import BoardView
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore

@@ -33,14 +33,11 @@ from drboard_functions.errors import (
     SubmissionLimitReached,
     TooSoon,
 )
-from drboard_functions.models import (
-    Board,
+from drboard_functions.models.domain import Board
+from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission, ExportPage
+from drboard_functions.models.views import (
     BoardPage,
     BoardView,
-    ExportedBoard,
-    ExportedEntry,
-    ExportedSubmission,
-    ExportPage,
     PushReceipt,
     RacerHistory,
     RacerSummary,

@@ -7,15 +7,10 @@ import re
 from datetime import UTC, datetime, timedelta
 
 import pytest
+from drboard_assembler.record import RaceType
 from drboard_functions import web
-from drboard_functions.models import (
-    BoardPage,
-    BoardStatus,
-    BoardView,
-    EntryView,
-    RaceType,
-    TimingMethod,
-)
+from drboard_functions.models.domain import BoardStatus, TimingMethod
+from drboard_functions.models.views import BoardPage, BoardView, EntryView
 
 NOW = datetime(2026, 12, 1, 18, 0, tzinfo=UTC)
 

@@ -162,7 +162,7 @@ def _check_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record], b
     from collections import Counter
 
     from drboard_functions.display import duration
-    from drboard_functions.models import BoardStatus, run_mismatches
+    from drboard_functions.models.domain import BoardStatus, run_mismatches
 
     from ..main import BAD_INPUT, FAILURE, fail
 

@@ -57,7 +57,7 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
 
 
 def _collect(client: BoardClient, board_id: str, top: int) -> Any:
-    from drboard_functions.models import MAX_PAGE
+    from drboard_functions.models.domain import MAX_PAGE
 
     page = client.board_page(board_id, min(top, MAX_PAGE), None)
     entries = list(page.entries)

@@ -13,17 +13,10 @@ from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import limits
 
 from ..errors import InvalidQuery
-from ..models import (
-    AuditPage,
-    Board,
-    BoardChanges,
-    BoardSpec,
-    BoardView,
-    ExportPage,
-    ImportedSubmission,
-    ImportReceipt,
-    Moderation,
-)
+from ..models.domain import Board
+from ..models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from ..models.transfer import ExportPage, ImportReceipt
+from ..models.views import AuditPage, BoardView, Moderation
 from .params import (
     ADMIN_TAG,
     BOARD_BODY,

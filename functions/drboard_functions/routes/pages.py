@@ -14,7 +14,7 @@ from aws_lambda_powertools.event_handler import Request, Response
 
 from .. import web
 from ..errors import BoardNotFound
-from ..models import MAX_PAGE
+from ..models.domain import MAX_PAGE
 from ..service import DEFAULT_TOP
 from ..views import page_tag
 from .params import (

@@ -8,7 +8,7 @@ from typing import NamedTuple, Protocol
 
 from drboard_assembler.record import Record
 
-from ..models import (
+from ..models.domain import (
     AliasClaim,
     AuditEvent,
     Board,

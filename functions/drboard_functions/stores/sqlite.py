@@ -20,7 +20,7 @@ from drboard_assembler.record import Record
 
 from .. import ranking
 from ..errors import StoreBusy
-from ..models import (
+from ..models.domain import (
     AliasClaim,
     AuditEvent,
     Board,
