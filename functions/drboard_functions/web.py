@@ -205,7 +205,7 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
     entry, record, board = view.entry, view.record, view.board
     standing = (f"#{entry.rank} on {board.title} · {seconds(entry.time_ms)}" if entry.qualified
                 else f"#{entry.rank} on {board.title} · {percent(entry.best_completion_pct)} done")
-    links = []
+    links: list[dict[str, str]] = []
     for other, text in ((leader, "Compare with the leader, {}"), (ahead, "Compare with {}, just ahead")):
         if other and other != view.racer and all(other not in link["text"] for link in links):
             links.append({"path": compare_path(board.board_id, [other, view.racer]),

@@ -66,13 +66,13 @@
       heard = Date.now();
       lastGood = new Date();
       connection(true);
-      if (answer.status === 304) { say("Live · updated " + clock(lastGood)); return; }
+      if (answer.status === 304) { say("Live"); return; }
       const next = new DOMParser().parseFromString(await answer.text(), "text/html")
         .querySelector("main[data-board]");
       if (!next) throw new Error("not a board page");
       apply(next, answer);
       say(answer.status === 404 ? "Waiting for the board's first push"
-        : "Live · updated " + clock(lastGood));
+        : "Live");
       countdown();
     } catch (error) {
       connection(false);
