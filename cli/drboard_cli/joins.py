@@ -47,7 +47,7 @@ CODE_ALPHABET = "ABCDEFGHJKLMNPQRSTUVWXYZ23456789"
 CODE_LENGTH = 8
 DEFAULT_MAX_JOINS = 100
 DEFAULT_TOKEN_HOURS = 24
-ATTEMPTS_PER_WINDOW = 10
+ATTEMPTS_PER_WINDOW = 30
 ATTEMPT_WINDOW_S = 600.0
 #: What a code may hold as typed: letters, digits, dashes and spaces (anything else is refused
 #: before it is compared).

@@ -333,13 +333,11 @@ class BoardServer:
         if pushed and status in (200, 201):
             from drboard_functions.models.views import PushReceipt
 
-            from . import render
-
             receipt = PushReceipt.model_validate_json(body)
             if caller is not None and self.desk is not None and caller.principal.startswith("join:"):
                 self.desk.note_alias(caller.principal, receipt.entry.racer)
-            self.say(f"{receipt.entry.racer} pushed: {render.receipt_line(receipt).plain}"
-                     + ("" if caller is None or caller.principal == "local" else f" ({who})"))
+            self.say(_push_line(receipt) + ("" if caller is None or caller.principal == "local"
+                                            else f"  [{http['sourceIp']}, {caller.principal}]"))
         elif method == "PUT" and path == "/me/alias" and status == 200:
             alias = json.loads(body).get("alias")
             if alias and caller is not None and self.desk is not None:

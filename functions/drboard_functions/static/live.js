@@ -15,11 +15,11 @@
     .getPropertyValue("--hold")) * 1000 || 8000;
   const FADE_MS = 2000, POLL_MS = 3000, STREAMED_POLL_MS = 15000, TIMEOUT_MS = 4000;
   const STREAM_SILENCE_MS = 4500;  // serve pings every 2 s: silence this long is a lost link
-  const BANNER_MS = 8000, BACK_MS = 4000, SHOW_MS = 6000;
+  const BANNER_MS = 8000, BACK_MS = 4000, SHOW_MS = 6000, MIN_SHOW_MS = 1500;
   const marks = new Map();  // racer -> {kind, since, move}
   const arrivals = [];      // racers to bring into view on the big screen, oldest first
   let etag = main.dataset.etag || null, busy = false, streamed = false, lost = false;
-  let heard = Date.now(), holdUntil = 0, lastGood = new Date();
+  let heard = Date.now(), holdUntil = 0, shownAt = 0, lastGood = new Date();
 
   const $ = (id) => document.getElementById(id);
   const rows = () => new Map([...main.querySelectorAll("tr[data-racer]")]
@@ -103,6 +103,8 @@
         arrivals.push(racer);
       }
     }
+    // an arrival waiting cuts short the hold of the one before, once it has been seen a while
+    if (arrivals.length) holdUntil = Math.min(holdUntil, shownAt + MIN_SHOW_MS);
     const top = main.querySelector("tr[data-racer]");
     if (top && oldLeader && top.dataset.racer !== oldLeader.dataset.racer) {
       const mark = marks.get(top.dataset.racer) || { since: now, move: "" };
@@ -177,7 +179,8 @@
         if (box.top < Math.max(top, 0) || box.bottom > window.innerHeight) {
           row.scrollIntoView({ block: "center" });
         }
-        holdUntil = now + SHOW_MS;
+        shownAt = now;
+        holdUntil = now + (arrivals.length ? MIN_SHOW_MS : SHOW_MS);
         pause = 200;
         return;
       }
