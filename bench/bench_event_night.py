@@ -77,7 +77,8 @@ class Serve:
         while not any("drboard join" in line for line in self.lines):
             line = self.process.stdout.readline()
             if not line:
-                raise SystemExit("drboard serve stopped: " + (self.process.stderr.read() if self.process.stderr else ""))
+                said = self.process.stderr.read() if self.process.stderr else ""
+                raise SystemExit(f"drboard serve stopped: {said}")
             self.lines.append(line.rstrip())
         self.url = re.search(r"on (http://\S+)", self.lines[0])[1]  # type: ignore[index]
         self.screen = next(line.split()[-1] for line in self.lines if "Big screen:" in line)
