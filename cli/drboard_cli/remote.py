@@ -40,6 +40,7 @@ from drboard_functions.models.views import (
     RacerHistory,
     RacerSummary,
     RacerView,
+    RankCounters,
 )
 from drboard_functions.service import default_board_id
 from pydantic import BaseModel, ValidationError
@@ -127,6 +128,11 @@ class HttpBoard:
     def restore_board(self, board_id: str) -> BoardView:
         answer = self._call("POST", f"/boards/{_quote(board_id)}/restore", signed=True)
         return _parse(BoardView, answer)
+
+    def rebuild_ranks(self, board_id: str, budget_s: float | None) -> RankCounters:
+        # The board decides how long one request counts.
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/rank-counters", signed=True)
+        return _parse(RankCounters, answer)
 
     def export_page(self, board_id: str, cursor: str | None) -> ExportPage:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/export", query={"cursor": cursor},
