@@ -5,8 +5,8 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading) and ``transfer`` (export and import). :class:`LeaderboardService` only hands
-each call to the room that answers it.
+trail's reading), ``transfer`` (export and import) and ``results`` (laps to analyse).
+:class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
 from __future__ import annotations
@@ -30,13 +30,14 @@ from .moderating import Moderating
 from .paging import DEFAULT_PAGE
 from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+from .results import LAPS_PAGE, Results
 from .transfer import Transfer
 
 P = ParamSpec("P")
 R = TypeVar("R")
 
 __all__ = [
-    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "MAX_COMPARED", "MAX_TOP", "Clock",
+    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "LAPS_PAGE", "MAX_COMPARED", "MAX_TOP", "Clock",
     "LeaderboardService", "board_for_track", "check_record_size", "default_board_id",
     "evaluation_fingerprints", "is_default_board_id", "racer_key", "scored_write", "utc_now",
 ]
@@ -69,6 +70,7 @@ class LeaderboardService:
         self._managing = Managing(keeper)
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
+        self._results = Results(keeper)
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)
@@ -99,3 +101,6 @@ class LeaderboardService:
     export_page = _handed_to("_transfer", Transfer.export_page)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
+
+    laps_page = _handed_to("_results", Results.laps_page)
+    run_laps = _handed_to("_results", Results.run_laps)
