@@ -5,7 +5,8 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading), ``transfer`` (export and import) and ``results`` (laps to analyse).
+trail's reading), ``transfer`` (export and import), ``results`` (laps to analyse) and
+``webhooks`` (the chat's announcements).
 :class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Concatenate, ParamSpec, TypeVar
 
+from ..models.notices import EntryChange
 from ..stores.base import BoardStore, RecordArchive
 from .boards import (
     CUSTOM_PREFIX,
@@ -32,6 +34,7 @@ from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
 from .results import LAPS_PAGE, Results
 from .transfer import Transfer
+from .webhooks import Webhooks
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -71,6 +74,8 @@ class LeaderboardService:
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
         self._results = Results(keeper)
+        self._webhooks = Webhooks(keeper)
+        self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)
@@ -104,3 +109,12 @@ class LeaderboardService:
 
     laps_page = _handed_to("_results", Results.laps_page)
     run_laps = _handed_to("_results", Results.run_laps)
+
+    add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
+    webhooks = _handed_to("_webhooks", Webhooks.webhooks)
+    remove_webhook = _handed_to("_webhooks", Webhooks.remove_webhook)
+    test_webhook = _handed_to("_webhooks", Webhooks.test_webhook)
+
+    def listen(self, listener: Callable[[EntryChange], None] | None) -> None:
+        """Tell ``listener`` of every entry a push improves, as it happens (None: no one)."""
+        self._keeper.listener = listener
