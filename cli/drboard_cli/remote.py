@@ -27,6 +27,7 @@ from drboard_assembler.record import Record
 from drboard_functions import errors
 from drboard_functions.laps import LAP_COLUMNS
 from drboard_functions.models.domain import MAX_PAGE, Board
+from drboard_functions.models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
 from drboard_functions.models.requests import AliasRequest, BoardChanges, BoardSpec, ImportedSubmission
 from drboard_functions.models.transfer import ExportPage, ImportReceipt
 from drboard_functions.models.views import (
@@ -185,6 +186,21 @@ class HttpBoard:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/audit",
                             query={"cursor": cursor, "limit": str(limit)}, signed=True)
         return _parse(AuditPage, answer)
+
+    def add_webhook(self, board_id: str, spec: WebhookSpec) -> WebhookView:
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/webhooks", body=spec, signed=True)
+        return _parse(WebhookView, answer)
+
+    def webhooks(self, board_id: str) -> WebhookList:
+        return _parse(WebhookList, self._call("GET", f"/boards/{_quote(board_id)}/webhooks", signed=True))
+
+    def remove_webhook(self, board_id: str, webhook_id: str) -> WebhookView:
+        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}"
+        return _parse(WebhookView, self._call("DELETE", path, signed=True))
+
+    def test_webhook(self, board_id: str, webhook_id: str) -> Delivery:
+        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}/test"
+        return _parse(Delivery, self._call("POST", path, signed=True))
 
     # ---- HTTP ---------------------------------------------------------------------------
 

@@ -32,6 +32,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
     (`drboard board ...`, `audit`, `export`, `import`) are answered only on this machine itself.
     Ctrl-C stops it; every push that was answered is saved.
     """
+    from drboard_functions.notify.notifier import NoticeWorker
     from drboard_functions.services import dynamodb_service, sqlite_service
 
     from ..joins import JoinDesk
@@ -52,6 +53,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         url = f"http://{_reachable(bound_host)}:{bound_port}"
         out().print(f"Serving {where} on http://{bound_host}:{bound_port}  (Ctrl-C to stop)",
                     soft_wrap=True)
+        notices = NoticeWorker(service, url).start()  # the chat's announcements, in the background
         stop = threading.Event()
         announcer = threading.Thread(target=_announce_codes, args=(desk, url, stop), daemon=True)
         announcer.start()
@@ -63,6 +65,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         finally:
             stop.set()
             server.server_close()
+            notices.stop()
             desk.close()
 
 

@@ -255,3 +255,12 @@ def import_command(ctx: Context, source: str, board_id: str | None) -> None:
             summary = transfer.import_export(ctx.board, name, handle, contents, board_id,
                                              advance=lambda: progress.advance(task))
         out().print(render.import_summary(summary), soft_wrap=True)
+
+
+def _add_webhook_commands() -> None:
+    from .webhooks import webhook_group
+
+    board_group.add_command(webhook_group)
+
+
+_add_webhook_commands()

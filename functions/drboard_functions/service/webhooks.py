@@ -62,10 +62,14 @@ class Webhooks:
         self.keeper.audit(board_id, "webhook-remove", caller, detail=f"{removed.kind} webhook {webhook_id}")
         return removed.view()
 
-    def test_webhook(self, board_id: str, webhook_id: str, board_url: str) -> Delivery:
+    def test_webhook(self, board_id: str, webhook_id: str, board_url: str | None = None) -> Delivery:
         """Post a test message to the webhook now (the board's podium as it stands), and note
-        how it went on it."""
+        how it went on it. ``board_url`` is the board's page (its path when the board has no
+        address of its own, as the embedded board)."""
+        from ..web import board_path
+
         stored = self.keeper.require(board_id)
+        board_url = board_url or board_path(board_id)
         target = Target(target_id=board_id)
         webhook = next((w for w in self.store.webhooks(target.key) if w.webhook_id == webhook_id), None)
         if webhook is None:
