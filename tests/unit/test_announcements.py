@@ -20,7 +20,7 @@ from drboard_cli.main import cli
 from drboard_functions.models.notices import EntryChange, WebhookSpec
 from drboard_functions.models.requests import BoardSpec
 from drboard_functions.notify import sending
-from drboard_functions.notify.notifier import Notifier, NoticeWorker
+from drboard_functions.notify.notifier import NoticeWorker, Notifier
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 from pydantic import ValidationError
@@ -43,7 +43,7 @@ class FakeChat:
         chat = self
 
         class Handler(BaseHTTPRequestHandler):
-            def do_POST(self) -> None:  # noqa: N802 - http.server's name
+            def do_POST(self) -> None:
                 data = self.rfile.read(int(self.headers["Content-Length"]))
                 chat.requests += 1
                 if chat.failures:
@@ -161,7 +161,8 @@ def test_each_event_says_what_happened(service: LeaderboardService, chats: list[
     assert texts[0].startswith("🏆 Blaze leads Club night with m1: 9.100 s (new at #1).")
     assert texts[1].startswith("🥈 Comet enters the top 3 on Club night with m1: 9.500 s, +0.400 s "
                                "to the leader (new at #2).")
-    assert texts[3].startswith("⏱ Ember is on Club night with m1: 9.950 s, +0.850 s to the leader (new at #4).")
+    assert texts[3].startswith("⏱ Ember is on Club night with m1: 9.950 s, +0.850 s to the leader "
+                               "(new at #4).")
 
     announce.entry_changed(pushed(service, "Ember", 9400, model="m2"))
     assert endpoint.bodies[-1]["event"] == "top-3"
@@ -215,7 +216,8 @@ def test_a_failing_webhook_is_retried_then_shown_to_the_organiser_and_the_push_s
     assert broken.requests == sending.TRIES and len(failures) == 1
     assert len(good.bodies) == 1, "a failing webhook holds no other"
     shown = [w for w in service.webhooks("club-night").webhooks if w.last_error]
-    assert len(shown) == 1 and shown[0].last_error == "the service answered 500 Internal Server Error (3 tries)"
+    assert len(shown) == 1
+    assert shown[0].last_error == "the service answered 500 Internal Server Error (3 tries)"
     assert shown[0].last_error_at is not None
     assert service.board_page("club-night").entries[0].racer == "Ada", "the push stands"
 

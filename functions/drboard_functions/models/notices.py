@@ -148,6 +148,7 @@ class Announcement(Model):
     previous_leader: str | None = None
     closes_at: datetime | None = None
     podium: list[Place] = []
+    test: bool = False  # an organiser's test message (`drboard board webhook test`)
     text: str = ""  # the message, in plain words
 
 

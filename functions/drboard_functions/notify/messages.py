@@ -22,6 +22,9 @@ _DISCORD_MARKUP = re.compile(r"([\\*_~`|>#\[\]()<@:-])")
 def words(a: Announcement, name: Any = str) -> str:
     """The announcement in plain words; ``name`` writes each name (escaped for a service)."""
     board = name(a.board_title)
+    if a.test:
+        standing = words(a.model_copy(update={"test": False}), name).split(". ", 1)[1] if a.podium else ""
+        return f"🧪 A test from drboard: announcements of {board} come here. {standing}".strip()
     if a.kind == "board-open":
         until = f" until {when(a.closes_at)}" if a.closes_at else ""
         return f"🟢 {board} is open: push your runs{until}."

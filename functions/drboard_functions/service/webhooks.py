@@ -77,11 +77,9 @@ class Webhooks:
         now = self.keeper.clock()
         test = Announcement(event_id=f"{board_id}#test#{now.isoformat()}", kind="board-close",
                             target=target, board_id=board_id, board_title=stored.board.title,
-                            url=board_url, at=now, podium=podium(self.store, board_id))
-        text = "🧪 A test from drboard: announcements for this board come here. " + \
-            (words(test).split(". ", 1)[1] if test.podium else "")
+                            url=board_url, at=now, podium=podium(self.store, board_id), test=True)
         notifier = Notifier(self.store, self.keeper.clock, lambda _: board_url, self.post)
-        return notifier.test(webhook, test.model_copy(update={"text": text}))
+        return notifier.test(webhook, test.model_copy(update={"text": words(test)}))
 
     def _board(self, board_id: str) -> Target:
         self.keeper.require(board_id)
