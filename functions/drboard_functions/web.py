@@ -256,6 +256,8 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
     links = '<p><a href="/">All boards</a>'
     if page.entries:
         links += f' · <a href="{escape(_insights_path(board.board_id))}">What the fast models share</a>'
+        laps = "/boards/" + quote(board.board_id, safe="") + "/laps.csv"
+        links += f' · <a href="{escape(laps)}" download>Every lap (CSV)</a>'
     links += "</p>"
     return _document(f"{board.title} · drboard", board.title, subtitle, head + body + links,
                      live=_live_attributes(board.board_id, etag, screen))
