@@ -97,6 +97,7 @@ class LeaderboardService:
     close_board = _handed_to("_managing", Managing.close_board)
     delete_board = _handed_to("_managing", Managing.delete_board)
     restore_board = _handed_to("_managing", Managing.restore_board)
+    rebuild_ranks = _handed_to("_managing", Managing.rebuild_ranks)
 
     remove_entry = _handed_to("_moderating", Moderating.remove_entry)
     ban = _handed_to("_moderating", Moderating.ban)

@@ -36,6 +36,7 @@ from ..base import (
     BoardHasEntries,
     BoardSlice,
     HistorySlice,
+    RankBuild,
     StoredBoard,
     StoredSubmissionPage,
     SubmissionPage,
@@ -74,7 +75,7 @@ from .codecs import (
 )
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
-from .transaction import PushTransaction, board_change
+from .transaction import PushTransaction
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
@@ -177,14 +178,14 @@ class DynamoDbStore:
             current = self.get_entry(board_id, racer_key)
             if current is None:
                 return None
-            _, generation = self.ranks.generation(board_id)
+            state = self.ranks.state(board_id)
             try:
                 self.client.transact_write_items(TransactItems=[
                     {"Delete": {"TableName": self.table, "Key": key(board_id, entry_sk(racer_key)),
                                 "ConditionExpression": "rank_key = :seen",
                                 "ExpressionAttributeValues": {":seen": text(current.rank_key)}}},
-                    board_change(self.table, board_id, -1, generation),
-                    *self.ranks.changes(board_id, generation, None, current.score_key)])
+                    self.ranks.board_change(board_id, -1, state),
+                    *self.ranks.changes(board_id, state, None, current)])
             except ClientError as error:
                 if code_of(error) != "TransactionCanceledException":
                     raise
@@ -197,15 +198,15 @@ class DynamoDbStore:
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 backoff(attempt)
-            exists, generation = self.ranks.generation(entry.board_id)
-            if not exists:
+            state = self.ranks.state(entry.board_id)
+            if not state.exists:
                 return
             try:
                 self.client.transact_write_items(TransactItems=[
                     {"Put": {"TableName": self.table, "Item": entry_item(entry),
                              "ConditionExpression": "attribute_not_exists(sk)"}},
-                    board_change(self.table, entry.board_id, +1, generation),
-                    *self.ranks.changes(entry.board_id, generation, entry.score_key, None)])
+                    self.ranks.board_change(entry.board_id, +1, state),
+                    *self.ranks.changes(entry.board_id, state, entry, None)])
             except ClientError as error:
                 if code_of(error) != "TransactionCanceledException":
                     raise
@@ -216,9 +217,10 @@ class DynamoDbStore:
         raise StoreBusy(f"{entry.board_id!r} is busy with other pushes: gave up restoring the entry; "
                         "try again in a moment")
 
-    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
-        """Give a board from before the rank counters its counters (see ``RankCounters.build``)."""
-        return self.ranks.build(board_id, max_racers)
+    def build_rank_counters(self, board_id: str, budget_s: float | None = None) -> RankBuild:
+        """Count the entries of a board from before the rank counters into its counters (see
+        ``RankCounters.build``)."""
+        return self.ranks.build(board_id, budget_s=budget_s)
 
     def append_audit(self, event: AuditEvent) -> None:
         self.client.put_item(TableName=self.table, Item=audit_item(event),
