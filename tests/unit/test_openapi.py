@@ -52,6 +52,7 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("DELETE", "/boards/{board}"),
         ("POST", "/boards/{board}/close"),
         ("POST", "/boards/{board}/restore"),
+        ("POST", "/boards/{board}/rank-counters"),
         ("GET", "/boards/{board}/export"),
         ("PUT", "/boards/{board}/import"),
         ("POST", "/boards/{board}/imports"),
@@ -67,6 +68,13 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("GET", "/me"),
         ("PUT", "/me/alias"),
         ("GET", "/.well-known/drboard.json"),
+        ("GET", "/boards/{board}/laps.csv"),
+        ("GET", "/boards/{board}/racers/{racer}/laps.json"),
+        ("GET", "/racers/{racer}/submissions.csv"),
+        ("POST", "/boards/{board}/webhooks"),
+        ("GET", "/boards/{board}/webhooks"),
+        ("DELETE", "/boards/{board}/webhooks/{webhook}"),
+        ("POST", "/boards/{board}/webhooks/{webhook}/test"),
     }
 
 

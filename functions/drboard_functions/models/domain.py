@@ -289,7 +289,7 @@ class AliasClaim(Model):
 
 AuditAction = Literal["push", "create", "update", "close", "delete", "restore", "import",
                       "remove-entry", "ban", "unban", "flag", "alias-reserve", "alias-release",
-                      "alias-assign", "recheck"]
+                      "alias-assign", "recheck", "webhook-add", "webhook-remove"]
 
 
 class AuditEvent(Model):

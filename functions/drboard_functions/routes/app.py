@@ -66,6 +66,7 @@ from ..errors import (
     TooSoon,
     UnreadableBody,
     UnsupportedBody,
+    WebhookNotFound,
 )
 from ..identity import caller_from_event
 from .params import ADMIN_TAG, SIGV4, RequestBody, bounded_json, route_body
@@ -109,6 +110,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (SubmissionTooLarge, HTTPStatus.REQUEST_ENTITY_TOO_LARGE),
     (BoardNotFound, HTTPStatus.NOT_FOUND),
     (RacerNotFound, HTTPStatus.NOT_FOUND),
+    (WebhookNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
     (UnreadableBody, HTTPStatus.BAD_REQUEST),
     (UnsupportedBody, HTTPStatus.UNSUPPORTED_MEDIA_TYPE),

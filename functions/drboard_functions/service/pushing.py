@@ -47,6 +47,7 @@ from ..models.domain import (
     SubmissionLimits,
     with_flag,
 )
+from ..models.notices import EntryChange
 from ..models.views import Me, PushAccepted, PushReceipt
 from ..stores.base import (
     AliasConflict,
@@ -113,6 +114,7 @@ class Pushing:
                                       bans_version=bans_version)
             audit = self.keeper.event(board_id, "push", caller, now, racer=record.racer,
                                       submission_id=record.submission_id, detail=record.model_name)
+            before = self.store.get_entry(board_id, key) if self.keeper.listener else None
             try:
                 outcome = self.store.record_submission(
                     submission, record, entry, limits, fingerprints=[p.fingerprint for p in prints],
@@ -137,6 +139,9 @@ class Pushing:
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
             stored = self.store.get_submission(board_id, key, record.submission_id)
             return self._duplicate_receipt(stored or submission, record.racer)
+        if outcome.improved and self.keeper.listener is not None:
+            self.keeper.listener(EntryChange(board_id=board_id, before=before,
+                                             after=outcome.entry, at=now))
         self._tell_organiser(board_id, record, verdict, caller, now)
         try:
             return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)

@@ -26,8 +26,11 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
   a push commits on condition that it is still the one the push checked against.
 
 Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
-holds an alias's claim and ``P#<principal>`` the same claim by its sign-in. Partitions of their
-own too, since they hold what spans boards:
+holds an alias's claim and ``P#<principal>`` the same claim by its sign-in. Webhooks live in
+``#WEBHOOK`` (sort key ``<target key>#<webhook id>``, the webhook in ``data``), and the markers of
+announcements sent in ``#NOTICE`` (``<event id>#<webhook id>``: ``state``, ``lease_until``, and
+``expires_at`` for the table's time to live). Partitions of their own too, since they hold what
+spans boards:
 
 - ``#RUN#<fingerprint>``: ``R#<racer_key>`` for each racer who pushed a run with that fingerprint,
   with their first time (``first_at``) and board (``board_id``): the first author holds the run;
@@ -67,6 +70,8 @@ ALIAS_PARTITION = "#ALIAS"
 EVENT_PARTITION = "#EVENT"
 BANS_SK = "#BANS"
 BEST_DIGITS = 10
+WEBHOOK_PARTITION = "#WEBHOOK"
+NOTICE_PARTITION = "#NOTICE"
 FIRST_ENTRY = "0"  # every entry's rank key sorts after this, the board's before it
 BOARD_KIND = "board"
 RANK_INDEX = "by_rank"

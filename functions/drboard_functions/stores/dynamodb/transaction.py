@@ -6,7 +6,11 @@ that the board's limits allow it; each evaluation's fingerprint is claimed unles
 holds it; the audit event is written; and the entry is put if the racer has none (the board's
 ``participants`` + 1 in the same transaction) or if it is strictly better — a condition on the
 stored entry, so concurrent pushes never lose a best nor pass a limit — with the rank counters
-moved to match.
+moved to match. It also claims, when the push asks, the racer's alias and its confusable skeleton
+on the board, on condition that the board's settings and the event's bans are still those the
+push checked (``settings``, ``bans``). A write whose outcome the service did not report (a timeout
+after the commit) is settled by reading the submission back; the runs' index for every board is
+written once the push has committed.
 """
 
 from __future__ import annotations
@@ -51,7 +55,7 @@ from .codecs import (
     tally_sk,
     text,
 )
-from .ranks import LAZY_BUILD_MAX_RACERS
+from .ranks import LAZY_BUILD_MAX_RACERS, RankState
 from .retries import MAX_ATTEMPTS, backoff
 
 if TYPE_CHECKING:
@@ -104,25 +108,15 @@ def bans_condition(version: int) -> tuple[str, dict[str, AttributeValueTypeDef]]
     return "version = :bans", {":bans": {"N": str(version)}}
 
 
-def board_change(table: str, board_id: str, change: int,
-                 generation: str | None, settings: int | None = None) -> TransactWriteItemTypeDef:
-    """The board's number of racers changed by ``change``, and its version bumped, on
-    condition that its rank counters are still those of ``generation`` (None: none) and, when
-    given, that its settings are still at version ``settings``."""
-    values: dict[str, AttributeValueTypeDef] = {":change": {"N": str(change)}, ":one": {"N": "1"}}
-    if generation is None:
-        condition = "attribute_exists(sk) AND attribute_not_exists(rank_generation)"
-    else:
-        condition = "rank_generation = :generation"
-        values[":generation"] = text(generation)
-    if settings is not None:
-        unchanged, more = settings_condition(settings)
-        condition = f"({condition}) AND ({unchanged})"
-        values |= more
-    return {"Update": {
-        "TableName": table, "Key": key(board_id, BOARD_SK),
-        "UpdateExpression": "SET participants = participants + :change ADD board_version :one",
-        "ConditionExpression": condition, "ExpressionAttributeValues": values}}
+def with_settings(change: TransactWriteItemTypeDef, settings: int | None) -> TransactWriteItemTypeDef:
+    """The board's update, on condition too that its settings are still at version ``settings``."""
+    if settings is None:
+        return change
+    update: Any = dict(change["Update"])
+    unchanged, values = settings_condition(settings)
+    update["ConditionExpression"] = f"({update['ConditionExpression']}) AND ({unchanged})"
+    update["ExpressionAttributeValues"] = {**update["ExpressionAttributeValues"], **values}
+    return {"Update": update}
 
 
 class PushTransaction:
@@ -144,14 +138,16 @@ class PushTransaction:
 
     def run(self) -> WriteOutcome:
         board_id, racer = self.entry.board_id, self.entry.racer_key
-        exists, generation = self.store.ranks.generation(board_id)
-        if exists and generation is None:
-            generation = self.store.ranks.build(board_id, max_racers=LAZY_BUILD_MAX_RACERS)
+        ranks = self.store.ranks
+        state = ranks.state(board_id)
+        if state.exists and state.generation is None and state.building is None:
+            ranks.build(board_id, max_racers=LAZY_BUILD_MAX_RACERS)
+            state = ranks.state(board_id)
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 backoff(attempt)
             current = self.store.get_entry(board_id, racer)
-            slots = self._slots(current, generation)
+            slots = self._slots(current, state)
             try:
                 self._commit(slots)
             except ClientError as error:
@@ -171,9 +167,10 @@ class PushTransaction:
                 if "alias" in failed:
                     raise AliasConflict(self._alias_holder()) from None
                 if "board" in failed:
-                    # No board, its rank counters were built meanwhile, or its settings changed.
-                    exists, generation = self.store.ranks.generation(board_id)
-                    if not exists:
+                    # No board, its rank counters were built (or a build moved) meanwhile, or its
+                    # settings changed.
+                    state = ranks.state(board_id)
+                    if not state.exists:
                         raise BoardNotFound(f"no board {board_id!r}") from None
                     if self._settings_moved():
                         raise BoardChanged(board_id) from None
@@ -218,7 +215,7 @@ class PushTransaction:
             return None
         return "Item" in item
 
-    def _slots(self, current: Entry | None, generation: str | None) -> Slots:
+    def _slots(self, current: Entry | None, state: RankState) -> Slots:
         board_id, entry = self.entry.board_id, self.entry
         slots = Slots()
         slots.add("submission", {"Put": {"TableName": self.table,
@@ -238,13 +235,15 @@ class PushTransaction:
         if current is None:
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "attribute_not_exists(sk)"}})
-            slots.add("board", board_change(self.table, board_id, +1, generation, settings))
+            slots.add("board", with_settings(self.store.ranks.board_change(board_id, +1, state),
+                                             settings))
         elif entry.rank_key < current.rank_key:
             # Exactly the entry read: the counters take its score off.
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "rank_key = :seen",
                                         "ExpressionAttributeValues": {":seen": text(current.rank_key)}}})
-            slots.add("board", board_change(self.table, board_id, 0, generation, settings))
+            slots.add("board", with_settings(self.store.ranks.board_change(board_id, 0, state),
+                                             settings))
         else:
             if settings is not None:  # the entry stays: the board's settings are checked alone
                 condition, values = settings_condition(settings)
@@ -252,8 +251,7 @@ class PushTransaction:
                     "TableName": self.table, "Key": key(board_id, BOARD_SK),
                     "ConditionExpression": condition, "ExpressionAttributeValues": values}})
             return slots  # not better: the entry stays as it is (entries only ever improve)
-        slots.extend("counters", self.store.ranks.changes(
-            board_id, generation, entry.score_key, current.score_key if current else None))
+        slots.extend("counters", self.store.ranks.changes(board_id, state, entry, current))
         return slots
 
     def _add_claims(self, slots: Slots) -> None:
