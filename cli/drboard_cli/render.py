@@ -30,6 +30,7 @@ from drboard_functions.display import (
 )
 from drboard_functions.flags import DESCRIPTIONS
 from drboard_functions.insights import LABELS, fact_text
+from drboard_functions.laps import cell as formula_safe
 from drboard_functions.models.domain import AuditEvent, BoardStatus, Design
 from drboard_functions.models.views import (
     AliasView,
@@ -232,18 +233,14 @@ def _flat_design(design: Design | None) -> dict[str, Any]:
             "max_steering": design.max_steering}
 
 
-#: What a spreadsheet takes for the start of a formula.
-FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
-
-
 def csv_cell(value: Any) -> Any:
     """A CSV cell as a spreadsheet should read it: text starting like a formula (``=``, ``+``,
-    ``-``, ``@``, a tab or a carriage return) gets a leading ``'``, so it stays text, and control
-    characters are escaped; numbers are written as they are."""
+    ``-``, ``@``, a tab or a carriage return) gets a leading ``'`` (the rule of
+    :func:`drboard_functions.laps.cell`, which the laps' CSV uses too), and control characters
+    are escaped; numbers are written as they are."""
     if not isinstance(value, str):
         return value
-    value = printable(value)
-    return "'" + value if value.startswith(FORMULA_START) else value
+    return formula_safe(printable(value))
 
 
 def write_csv(rows: Iterable[dict[str, Any]], fields: list[str]) -> str:
