@@ -35,7 +35,7 @@ from drboard_functions.models.requests import (
     BoardSpec,
     ImportedSubmission,
 )
-from drboard_functions.models.transfer import ExportPage, ImportReceipt
+from drboard_functions.models.transfer import ExportKind, ExportPage, ImportReceipt
 from drboard_functions.models.views import (
     AliasList,
     AliasView,
@@ -166,6 +166,16 @@ class HttpBoard:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/export", query={"cursor": cursor},
                             signed=True)
         return _parse(ExportPage, answer)
+
+    def export_lines(self, board_id: str) -> Iterator[tuple[ExportKind, bytes]]:
+        cursor: str | None = None
+        while True:
+            page = self.export_page(board_id, cursor)
+            for line in page.lines:
+                yield line.kind, line.model_dump_json().encode() + b"\n"
+            cursor = page.next_cursor
+            if cursor is None:
+                return
 
     def import_board(self, board: Board) -> tuple[BoardView, bool]:
         answer = self._call("PUT", f"/boards/{_quote(board.board_id)}/import", body=board,

@@ -3,7 +3,7 @@ deployed board (or `drboard serve`) answers the same calls over HTTP (``remote.H
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
@@ -12,7 +12,7 @@ if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` i
     from drboard_functions.models.domain import Board
     from drboard_functions.models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
     from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
-    from drboard_functions.models.transfer import ExportPage, ImportReceipt
+    from drboard_functions.models.transfer import ExportKind, ExportPage, ImportReceipt
     from drboard_functions.models.views import (
         AliasList,
         AliasView,
@@ -56,6 +56,7 @@ class BoardClient(Protocol):
     def restore_board(self, board_id: str) -> BoardView: ...
     def rebuild_ranks(self, board_id: str, budget_s: float | None) -> RankCounters: ...
     def export_page(self, board_id: str, cursor: str | None) -> ExportPage: ...
+    def export_lines(self, board_id: str) -> Iterator[tuple[ExportKind, bytes]]: ...
     def import_board(self, board: Board) -> tuple[BoardView, bool]: ...
     def import_submission(self, board_id: str, item: ImportedSubmission) -> ImportReceipt: ...
     def remove_entry(self, board_id: str, racer: str) -> Moderation: ...

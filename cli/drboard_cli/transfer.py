@@ -37,6 +37,7 @@ from .target import BoardClient
 
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
 STDIN = "-"
+WRITE_BUFFER_BYTES = 1 << 20
 
 _LINE = TypeAdapter[ExportLine](ExportLine)
 
@@ -54,29 +55,19 @@ class ExportCounts:
     submissions: int = 0
 
 
-def export_lines(client: BoardClient, board_id: str) -> Iterator[ExportLine]:
-    """The board's export, line by line, fetching one page at a time."""
-    cursor: str | None = None
-    while True:
-        page = client.export_page(board_id, cursor)
-        yield from page.lines
-        cursor = page.next_cursor
-        if cursor is None:
-            return
-
-
-def write_export(client: BoardClient, board_id: str, out: IO[str]) -> ExportCounts:
+def write_export(client: BoardClient, board_id: str, out: IO[bytes]) -> ExportCounts:
+    """Write the board's export, line by line as the board gives them."""
     counts = ExportCounts()
-    for line in export_lines(client, board_id):
-        out.write(line.model_dump_json() + "\n")
-        if isinstance(line, ExportedEntry):
+    for kind, line in client.export_lines(board_id):
+        out.write(line)
+        if kind == "entry":
             counts.entries += 1
-        elif isinstance(line, ExportedSubmission):
+        elif kind == "submission":
             counts.submissions += 1
     return counts
 
 
-def write_laps(client: BoardClient, board_id: str, out: IO[str]) -> int:
+def write_laps(client: BoardClient, board_id: str, out: IO[bytes]) -> int:
     """Every lap of the board's submissions as one CSV file, page after page; the rows written."""
     from drboard_functions.laps import LAP_COLUMNS, csv_text
 
@@ -85,7 +76,7 @@ def write_laps(client: BoardClient, board_id: str, out: IO[str]) -> int:
     rows = 0
     while True:
         page = client.laps_page(board_id, cursor)
-        out.write(csv_text(LAP_COLUMNS, page.rows, header=cursor is None))
+        out.write(csv_text(LAP_COLUMNS, page.rows, header=cursor is None).encode())
         rows += len(page.rows)
         cursor = page.next_cursor
         if cursor is None or cursor in seen:
@@ -93,14 +84,20 @@ def write_laps(client: BoardClient, board_id: str, out: IO[str]) -> int:
         seen.add(cursor)
 
 
+def standard_output() -> IO[bytes]:
+    """Standard output for bytes (whatever was printed to it as text goes out first)."""
+    sys.stdout.flush()
+    return sys.stdout.buffer
+
+
 @contextmanager
-def replaced_on_success(path: Path) -> Iterator[IO[str]]:
+def replaced_on_success(path: Path) -> Iterator[IO[bytes]]:
     """Write beside ``path`` and move into place only when the whole export is written."""
     if not path.parent.is_dir():
         raise FileNotFoundError(errno.ENOENT, "no such folder", str(path.parent))
     partial = path.with_name(path.name + ".partial")
     try:
-        with partial.open("w", encoding="utf-8") as handle:
+        with partial.open("wb", buffering=WRITE_BUFFER_BYTES) as handle:
             yield handle
         partial.replace(path)
     finally:

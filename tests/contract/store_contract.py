@@ -488,6 +488,23 @@ class StoreContract:
         assert pages in (3, 4)  # 11 in pages of 4; a store may need one empty last page
         assert store.submissions("nowhere", None, 4).submissions == []
 
+    def test_an_export_reads_every_entry_and_submission_as_stored(self, store: BoardStore) -> None:
+        records = [make_record(f"R{n % 4}", lap(12000 - n)) for n in range(9)]
+        for n, record in enumerate(records):
+            submit(store, record, at(n))
+        submit(store, make_record("Other"), at(20), make_board("Oval_track", track="Oval_track"))
+        entries = [Entry.model_validate_json(raw) for raw in store.exported_entries(TRACK)]
+        assert entries == store.top(TRACK, 100)
+        exported = list(store.exported_submissions(TRACK))
+        assert len(exported) == len(records)
+        for raw_submission, raw_record in exported:
+            submission = Submission.model_validate_json(raw_submission)
+            record = Record.model_validate_json(raw_record)
+            assert record == next(r for r in records if r.submission_id == submission.submission_id)
+            assert store.get_submission(TRACK, submission.racer_key, submission.submission_id) == submission
+        assert list(store.exported_entries("nowhere")) == []
+        assert list(store.exported_submissions("nowhere")) == []
+
     # ---- submission limits ------------------------------------------------------------------
 
     def test_tally_counts_a_racers_submissions_on_a_board(self, store: BoardStore) -> None:

@@ -406,6 +406,16 @@ def test_export_is_the_board_its_entries_and_every_submission(service: Leaderboa
     assert all(s.record.submission_id == s.submission.submission_id for s in submissions)
 
 
+def test_the_whole_export_read_from_the_store_is_its_pages_line_for_line(
+        service: LeaderboardService, clock: Clock) -> None:
+    filled_board(service, clock)
+    service.push(run("Dee", 9000, 9100, 9200), RACE)
+    paged = [line.model_dump_json().encode() + b"\n" for line in export(service)]
+    streamed = list(service.export_lines(RACE))
+    assert [line for _, line in streamed] == paged
+    assert [kind for kind, _ in streamed] == ["board"] + ["entry"] * 4 + ["submission"] * 7
+
+
 @pytest.mark.parametrize("target_kind", ["sqlite", "dynamodb"])
 def test_import_rebuilds_the_same_board_anywhere_and_twice_changes_nothing(
         service: LeaderboardService, clock: Clock, tmp_path: Path, target_kind: str) -> None:

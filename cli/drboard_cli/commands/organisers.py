@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -283,7 +282,7 @@ def export_command(ctx: Context, board_id: str, output: Path | None, laps: bool)
                 with transfer.replaced_on_success(output) as handle:
                     rows = transfer.write_laps(ctx.board, board_id, handle)
             else:
-                rows = transfer.write_laps(ctx.board, board_id, sys.stdout)
+                rows = transfer.write_laps(ctx.board, board_id, transfer.standard_output())
             err().print(render.laps_line(board_id, rows, str(output) if output else None),
                         soft_wrap=True)
             return
@@ -291,7 +290,7 @@ def export_command(ctx: Context, board_id: str, output: Path | None, laps: bool)
             with transfer.replaced_on_success(output) as handle:
                 counts = transfer.write_export(ctx.board, board_id, handle)
         else:
-            counts = transfer.write_export(ctx.board, board_id, sys.stdout)
+            counts = transfer.write_export(ctx.board, board_id, transfer.standard_output())
         err().print(render.export_line(board_id, counts, str(output) if output else None), soft_wrap=True)
 
 

@@ -57,6 +57,7 @@ class StoredSubmissionLine(ExportedSubmission):
                 "record": from_json(self._record_json)}
 
 
+ExportKind = Literal["board", "entry", "submission"]
 ExportLine = Annotated[ExportedBoard | ExportedEntry | ExportedSubmission, Field(discriminator="kind")]
 
 

@@ -109,6 +109,7 @@ class LeaderboardService:
     audit = _handed_to("_moderating", Moderating.audit)
 
     export_page = _handed_to("_transfer", Transfer.export_page)
+    export_lines = _handed_to("_transfer", Transfer.export_lines)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
     recheck_page = _handed_to("_transfer", Transfer.recheck_page)

@@ -8,6 +8,7 @@ what another racer holds is flagged for the organiser instead (both runs, for a 
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 
 from drboard_assembler.aliases import confusable_skeleton
 from drboard_assembler.record import Record
@@ -21,6 +22,7 @@ from ..models.requests import ImportedSubmission
 from ..models.transfer import (
     ExportedBoard,
     ExportedEntry,
+    ExportKind,
     ExportLine,
     ExportPage,
     ImportReceipt,
@@ -71,6 +73,22 @@ class Transfer:
         lines.extend(StoredSubmissionLine.of(s, raw) for s, raw in page.submissions)
         return ExportPage(lines=lines,
                           next_cursor=export_cursor("submissions", page.after) if page.after else None)
+
+    def export_lines(self, board_id: str) -> Iterator[tuple[ExportKind, bytes]]:
+        """The board's whole export as JSON lines (each ending in a newline), with each line's
+        kind: the lines `export_page` gives, read straight from the store. Its entries,
+        submissions and records are the JSON they were stored as (validated when they came
+        in), spliced into their lines: nothing is parsed or serialised again."""
+        stored = self.store.get_board(board_id)
+        if stored is None:
+            raise BoardNotFound(f"no board {board_id!r}")
+        head = ExportedBoard(exported_at=self.clock(), board=stored.board)
+        yield "board", head.model_dump_json().encode() + b"\n"
+        for entry in self.store.exported_entries(board_id):
+            yield "entry", b'{"kind":"entry","entry":' + entry + b"}\n"
+        for submission, record in self.store.exported_submissions(board_id):
+            yield "submission", (b'{"kind":"submission","submission":' + submission
+                                 + b',"record":' + record + b"}\n")
 
     def import_board(self, board: Board, caller: Caller = LOCAL_ORGANISER) -> tuple[BoardView, bool]:
         """Create the exported board unless a board with its id exists (then that board's own

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from datetime import datetime
 from typing import NamedTuple, Protocol
 
@@ -255,6 +255,14 @@ class BoardStore(NoticeStore, Protocol):
     def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
         """As ``submissions``, with each record the JSON it was stored as (not parsed): what an
         export writes out."""
+
+    def exported_entries(self, board_id: str) -> Iterator[bytes]:
+        """Every entry of the board in rank-key order, each the JSON it is stored as (UTF-8,
+        nothing parsed): what `drboard export` writes out, read a page at a time."""
+
+    def exported_submissions(self, board_id: str) -> Iterator[tuple[bytes, bytes]]:
+        """Every submission of the board in a stable order with its record, each the JSON it
+        is stored as (UTF-8, nothing parsed), read a page at a time."""
 
     def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
         """Up to ``limit`` entries in rank-key order, starting after the rank key ``after``."""

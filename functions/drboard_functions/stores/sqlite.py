@@ -12,10 +12,11 @@ from __future__ import annotations
 import sqlite3
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime, timedelta
 from pathlib import Path
+from typing import Any
 
 from drboard_assembler.record import Record
 
@@ -158,6 +159,8 @@ CREATE TABLE IF NOT EXISTS event_settings (
 EVENT_BANS = "bans"
 
 BUSY_TIMEOUT_S = 30.0
+#: Rows an export reads at a time.
+EXPORT_PAGE_ROWS = 500
 BUSY_RETRY_AFTER_S = 1
 
 
@@ -418,6 +421,23 @@ class SqliteStore:
             (board_id, after or "", limit)).fetchall()
         page = [(Submission.model_validate_json(row[1]), row[2]) for row in rows]
         return StoredSubmissionPage(page, rows[-1][0] if len(rows) == limit else None)
+
+    def exported_entries(self, board_id: str) -> Iterator[bytes]:
+        # CAST AS BLOB hands over the stored UTF-8 bytes as they are: nothing decoded.
+        yield from self._column_pages(
+            "SELECT CAST(entry AS BLOB) FROM entries WHERE board_id = ? ORDER BY rank_key",
+            (board_id,), lambda row: row[0])
+
+    def exported_submissions(self, board_id: str) -> Iterator[tuple[bytes, bytes]]:
+        yield from self._column_pages(
+            "SELECT CAST(submission AS BLOB), CAST(record AS BLOB) FROM submissions "
+            "WHERE board_id = ? ORDER BY submission_id", (board_id,), tuple)
+
+    def _column_pages(self, query: str, parameters: tuple[str, ...],
+                      shape: Callable[[Any], Any]) -> Iterator[Any]:
+        rows = self._db.execute(query, parameters)
+        while page := rows.fetchmany(EXPORT_PAGE_ROWS):
+            yield from map(shape, page)
 
     def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
         stored = self.get_board(board_id)

@@ -573,6 +573,34 @@ class DynamoDbStore:
         more = page.get("LastEvaluatedKey") and page["Items"]
         return StoredSubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
 
+    def exported_entries(self, board_id: str) -> Iterator[bytes]:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :board AND rank_key > :first",
+            "ExpressionAttributeValues": {":board": text(board_id), ":first": text(FIRST_ENTRY)},
+            "ProjectionExpression": "#data", "ExpressionAttributeNames": {"#data": "data"},
+        }
+        for page in self._pages(request):
+            for item in page["Items"]:
+                yield item["data"]["S"].encode()
+
+    def exported_submissions(self, board_id: str) -> Iterator[tuple[bytes, bytes]]:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":board": text(board_id), ":prefix": text("S#")},
+            "ProjectionExpression": "sk, #data", "ExpressionAttributeNames": {"#data": "data"},
+        }
+        for page in self._pages(request):
+            # ``S#<racer key>#<submission id>``: the id is the part after the last "#".
+            submissions = [(item["sk"]["S"].rpartition("#")[2], item["data"]["S"])
+                           for item in page["Items"]]
+            records = self._records(board_id, [submission_id for submission_id, _ in submissions])
+            for submission_id, data in submissions:
+                record = records.get(submission_id)
+                if record is not None:
+                    yield data.encode(), record
+
     def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, bytes]:
         """The records' JSON, as stored, by submission id."""
         records: dict[str, bytes] = {}
