@@ -15,6 +15,9 @@ importing the same file twice is harmless.
 from __future__ import annotations
 
 import errno
+import io
+import os
+import pickle
 import re
 import shutil
 import sys
@@ -23,10 +26,11 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING, Any, TypeGuard
 
 from drboard_assembler.errors import field_path
 from drboard_assembler.record import RaceType
+from drboard_functions.errors import DomainError
 from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, run_mismatches
 from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission, ExportLine
@@ -35,7 +39,19 @@ from pydantic import TypeAdapter, ValidationError
 
 from .target import BoardClient
 
+if TYPE_CHECKING:
+    from drboard_functions.service import LeaderboardService
+    from drboard_functions.service.loading import BulkImport, PreparedSubmission
+
+#: Starts a phase of a long command, with its total (None: unknown): how to say it advanced.
+Phase = Callable[[str, int | None], Callable[[int], None]]
+
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
+#: Submissions an import in bulk writes in one transaction.
+IMPORT_BATCH = 500
+#: How an import in bulk reads an export's records: as the board's own stored records are read
+#: (schema and bounds; not today's rules of aliases, text, tracks and lap floors).
+IMPORT_CHECKS = {"stored": True}
 STDIN = "-"
 WRITE_BUFFER_BYTES = 1 << 20
 
@@ -185,7 +201,106 @@ def import_export(client: BoardClient, name: str, handle: IO[bytes], contents: E
     return summary
 
 
-def _parsed_lines(name: str, handle: IO[bytes]) -> Iterator[tuple[int, ExportLine]]:
+# ---- import in bulk (the embedded board) -------------------------------------------------------
+
+
+def loads_in_bulk(client: BoardClient) -> TypeGuard[LeaderboardService]:
+    """Whether the board runs in this process, where an import is checked whole, then written
+    in bulk; a board over HTTP takes the submissions one request each."""
+    from drboard_functions.service import LeaderboardService
+
+    return isinstance(client, LeaderboardService)
+
+
+def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
+                phase: Phase = lambda _, __: lambda _: None) -> ImportSummary:
+    """Import an export file in bulk: every line is read and checked, and every submission
+    prepared (kept in a temporary file), before anything is written; one bad line names the
+    file, the line and the field, and nothing is imported. Then the board is created (unless
+    it exists: its own settings stay) and the prepared submissions are written, IMPORT_BATCH
+    to a transaction. Each record is checked for its schema and bounds, its size and its
+    integrity (its submission id is its content's hash), as the board's stored records are:
+    not against today's rules of aliases, text, tracks and lap floors (`drboard board recheck`
+    flags the records those would refuse)."""
+    with tempfile.TemporaryFile() as spool:
+        bulk, entries, submissions = _prepare(service, name, handle, board_id, spool, phase)
+        view, created = bulk.open()
+        summary = ImportSummary(board=view, board_created=created, entry_lines=entries)
+        advance = phase("Importing submissions", submissions)
+        spool.seek(0)
+        while True:
+            try:
+                batch: list[PreparedSubmission] = pickle.load(spool)
+            except EOFError:
+                break
+            tally = bulk.load(batch)
+            summary.created += tally.created
+            summary.duplicates += tally.duplicates
+            advance(len(batch))
+    summary.board = service.board_page(view.board_id, 1, None).board
+    return summary
+
+
+def _prepare(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
+             spool: IO[bytes], phase: Phase) -> tuple[BulkImport, int, int]:
+    """Check every line and prepare every submission into ``spool``, a batch per pickle: the
+    import, and how many entry and submission lines the file holds."""
+    advance = phase("Checking the export", _size(handle))
+    bulk: BulkImport | None = None
+    exported: Board | None = None
+    entries = submissions = 0
+    batch: list[PreparedSubmission] = []
+    read = 0
+    for number, line in _parsed_lines(name, handle, IMPORT_CHECKS):
+        where = f"{name}:{number}"
+        if isinstance(line, ExportedBoard):
+            if exported is not None:
+                raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
+            exported = line.board
+            board = _renamed(exported, board_id) if board_id and board_id != exported.board_id else exported
+            bulk = service.bulk_import(board)
+            _check_same_track(bulk.board, board)
+        elif bulk is None or exported is None:
+            raise BadExportFile(f"{where}: kind: the first line must be the board (\"kind\": \"board\")")
+        elif isinstance(line, ExportedEntry):
+            entries += 1
+        else:
+            _check_submission(where, line, exported)
+            item = ImportedSubmission.model_construct(submitted_at=line.submission.submitted_at,
+                                                      record=line.record)
+            try:
+                batch.append(bulk.prepare(item))
+            except DomainError as error:
+                raise BadExportFile(f"{where}: {_refusal(error)}") from None
+            submissions += 1
+            if len(batch) == IMPORT_BATCH:
+                pickle.dump(batch, spool, protocol=pickle.HIGHEST_PROTOCOL)
+                batch = []
+        advance(handle.tell() - read)
+        read = handle.tell()
+    if bulk is None:
+        raise BadExportFile(f"{name}: the file is empty: an export starts with its board line")
+    if batch:
+        pickle.dump(batch, spool, protocol=pickle.HIGHEST_PROTOCOL)
+    return bulk, entries, submissions
+
+
+def _refusal(error: DomainError) -> str:
+    """``field: message`` of a submission the board refuses to import."""
+    if error.detail:
+        return f"{error.detail[0]['loc']}: {error.detail[0]['msg']}"
+    return f"record: {error.message}"
+
+
+def _size(handle: IO[bytes]) -> int | None:
+    try:
+        return os.fstat(handle.fileno()).st_size
+    except (OSError, io.UnsupportedOperation):
+        return None
+
+
+def _parsed_lines(name: str, handle: IO[bytes],
+                  context: dict[str, Any] | None = None) -> Iterator[tuple[int, ExportLine]]:
     number = 0
     while raw := handle.readline(MAX_LINE_BYTES + 1):
         number += 1
@@ -195,7 +310,7 @@ def _parsed_lines(name: str, handle: IO[bytes]) -> Iterator[tuple[int, ExportLin
         if not raw.strip():
             continue
         try:
-            yield number, _LINE.validate_json(raw)
+            yield number, _LINE.validate_json(raw, context=context)
         except ValidationError as error:
             raise BadExportFile(f"{where}: {_problem(error)}") from None
 
@@ -235,7 +350,7 @@ def _track_mismatch(track: str, direction: str | None, race_type: RaceType,
     return problem[mismatches[0]] if mismatches else ""
 
 
-def _check_same_track(target: BoardView, exported: Board) -> None:
+def _check_same_track(target: Board | BoardView, exported: Board) -> None:
     """An existing board keeps its settings, but its runs must be on the exported board's track."""
     mismatch = _track_mismatch(exported.track, exported.direction, exported.race_type, target)
     if mismatch:

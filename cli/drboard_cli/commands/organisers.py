@@ -305,16 +305,25 @@ def import_command(ctx: Context, source: str, board_id: str | None) -> None:
     FILE (or `-` for standard input) is checked whole first: one bad line names the line and the
     field, and nothing is imported. The board is created unless it exists (then its own settings
     stay); every submission is replayed with its first submission time, and the entries are
-    recomputed under the board's rules.
+    recomputed under the board's rules. On the embedded board the submissions are written in
+    bulk, a batch to a transaction.
     """
     from .. import render, transfer
 
     with edge(), transfer.opened_export(source) as (name, handle):
-        contents = transfer.check_export(name, handle)
+        board = ctx.board
         with render.progress(err()) as progress:
-            task = progress.add_task("Importing submissions", total=contents.submissions)
-            summary = transfer.import_export(ctx.board, name, handle, contents, board_id,
-                                             advance=lambda: progress.advance(task))
+            if transfer.loads_in_bulk(board):
+                def phase(description: str, total: int | None) -> Callable[[int], None]:
+                    task = progress.add_task(description, total=total)
+                    return lambda done: progress.advance(task, done)
+
+                summary = transfer.load_export(board, name, handle, board_id, phase)
+            else:
+                contents = transfer.check_export(name, handle)
+                task = progress.add_task("Importing submissions", total=contents.submissions)
+                summary = transfer.import_export(board, name, handle, contents, board_id,
+                                                 advance=lambda: progress.advance(task))
         out().print(render.import_summary(summary), soft_wrap=True)
 
 

@@ -112,6 +112,7 @@ class LeaderboardService:
     export_lines = _handed_to("_transfer", Transfer.export_lines)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
+    bulk_import = _handed_to("_transfer", Transfer.bulk_import)
     recheck_page = _handed_to("_transfer", Transfer.recheck_page)
 
     assign_alias = _handed_to("_aliases", Aliases.assign_alias)

@@ -37,6 +37,8 @@ NEAR_MS = 5
 
 COPIED = "copied-run"
 NEAR_COPY = "near-copy"
+#: An alias that could pass for another racer's on the board (an organiser's push or import).
+LOOKALIKE = "lookalike"
 
 
 def run_fingerprint(run: EvaluationRun) -> str:

@@ -295,14 +295,16 @@ def keep_in_archive(archive: RecordArchive | None, board_id: str, record: Record
         archive.put(board_id, record)
 
 
-def check_record_size(record: Record) -> None:
+def check_record_size(record: Record) -> str:
     """Every board, embedded or in the cloud, holds a record to the same bound in bytes (its
     JSON, as the assembler measures it); the record's model bounds the rest (string lengths,
-    laps, runs, curve points)."""
-    size = len(record.model_dump_json().encode("utf-8"))
+    laps, runs, curve points). Returns that JSON."""
+    text = record.model_dump_json()
+    size = len(text.encode("utf-8"))
     if size > MAX_RECORD_BYTES:
         raise SubmissionTooLarge(f"the record is {size} bytes, over the {MAX_RECORD_BYTES} "
                                  "bytes a record may have")
+    return text
 
 
 def scored_write(record: Record, board: Board, at: datetime,

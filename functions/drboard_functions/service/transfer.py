@@ -32,7 +32,16 @@ from ..models.views import BoardView, FlaggedRun, RecheckPage
 from ..stores.base import RecordArchive, stored_record
 from ..views import board_view
 from .boards import BoardKeeper, check_belongs, default_board_id, live
-from .copies import COPIED, NEAR_COPY, NEAR_MS, evaluation_fingerprints, run_prints, same_laps
+from .copies import (
+    COPIED,
+    LOOKALIKE,
+    NEAR_COPY,
+    NEAR_MS,
+    evaluation_fingerprints,
+    run_prints,
+    same_laps,
+)
+from .loading import BulkImport
 from .pushing import check_record_size, keep_in_archive, scored_write
 
 EXPORT_ENTRIES = 500
@@ -40,7 +49,6 @@ EXPORT_SUBMISSIONS = 25  # with their records, up to 64 KiB each: a page stays u
 RECHECK_SUBMISSIONS = 25
 #: A stored run that today's checks would refuse (a tightened rule): for the organiser to look at.
 RULE_CHANGED = "rule-changed"
-LOOKALIKE = "lookalike"
 
 
 class Transfer:
@@ -94,11 +102,7 @@ class Transfer:
         """Create the exported board unless a board with its id exists (then that board's own
         settings stay). Returns the board and whether it was created."""
         now = self.clock()
-        expected = default_board_id(board.track, board.direction, board.race_type)
-        kind = "default" if board.board_id == expected else "named"
-        if kind == "named" and not re.match(BOARD_ID_PATTERN, board.board_id):
-            raise InvalidQuery(f"{board.board_id!r} is not a board id: letters, digits, _ - .")
-        board = board.model_copy(update={"kind": kind, "deleted_at": None})
+        board = _importable(board)
         existing = self.store.get_board(board.board_id)
         if existing is not None:
             live(board.board_id, existing)
@@ -125,6 +129,17 @@ class Transfer:
             self._check_copies(submission, record, caller)
         return ImportReceipt(status="duplicate" if outcome.duplicate else "created",
                              board_id=board_id, submission_id=record.submission_id)
+
+    def bulk_import(self, board: Board, caller: Caller = LOCAL_ORGANISER) -> BulkImport:
+        """An import of an export into the board with ``board``'s id, in bulk: every submission
+        checked and prepared before anything is written, then written a batch at a time, as
+        ``import_submission`` would write them one by one (see ``loading``). The board with that
+        id, if there is one, keeps its own settings; else the exported board is created."""
+        board = _importable(board)
+        existing = self.store.get_board(board.board_id)
+        if existing is not None:
+            board = live(board.board_id, existing).board
+        return BulkImport(self, self.keeper, self.archive, board, caller)
 
     def recheck_page(self, board_id: str, cursor: str | None = None,
                      caller: Caller = LOCAL_ORGANISER) -> RecheckPage:
@@ -195,6 +210,16 @@ class Transfer:
                           submission_id=submission.submission_id, detail=f"{flag}: {why}")
         return [FlaggedRun(board_id=submission.board_id, racer=submission.racer,
                            submission_id=submission.submission_id, flag=flag, why=why)]
+
+
+def _importable(board: Board) -> Board:
+    """The exported board as an import creates it: a track's default board if its id is that
+    board's, else a named board (whose id must be one); never deleted."""
+    expected = default_board_id(board.track, board.direction, board.race_type)
+    kind = "default" if board.board_id == expected else "named"
+    if kind == "named" and not re.match(BOARD_ID_PATTERN, board.board_id):
+        raise InvalidQuery(f"{board.board_id!r} is not a board id: letters, digits, _ - .")
+    return board.model_copy(update={"kind": kind, "deleted_at": None})
 
 
 def _todays_problem(raw: str | bytes) -> str | None:

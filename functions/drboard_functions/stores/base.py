@@ -144,6 +144,57 @@ class StoredSubmissionPage(NamedTuple):
     after: str | None  # where the next page starts; None on the last page
 
 
+class ImportedRow(NamedTuple):
+    """One submission of a bulk import as the store writes it: its JSON, its record's JSON
+    and the entry it makes, with the keys they are found by (see ``BoardStore.import_batch``)."""
+
+    submission_id: str
+    racer_key: str
+    submitted_at: str  # ranking.timestamp of the submission's time
+    score_key: str
+    rank_key: str
+    submission: str  # the Submission's JSON
+    entry: str  # the Entry's JSON: the racer's entry if it is their best
+    record: str  # the Record's JSON
+
+
+class IndexedRun(NamedTuple):
+    """A run of an imported submission, indexed for every board (copies and near-copies)."""
+
+    fingerprint: str
+    lane: str
+    laps_ms: tuple[int, ...] | None
+    racer_key: str
+    submitted_at: str  # ranking.timestamp
+    submission_id: str
+
+
+class ImportBatch(NamedTuple):
+    """What one batch of a bulk import writes, in one transaction."""
+
+    rows: list[ImportedRow]  # in import order
+    fingerprints: list[tuple[str, str]]  # (fingerprint, racer key): claimed on the board where free
+    skeletons: list[tuple[str, str]]  # (confusable skeleton, racer key): held where free
+    runs: list[IndexedRun]
+    audit: list[AuditEvent]
+
+
+class ImportWritten(NamedTuple):
+    created: int  # submissions stored (those already on the board are left as they are)
+    improved: int  # entries made or bettered
+
+
+def new_rows(rows: Sequence[ImportedRow], present: set[str]) -> list[ImportedRow]:
+    """The rows whose submission is not on the board yet, each submission once."""
+    seen = set(present)
+    kept = []
+    for row in rows:
+        if row.submission_id not in seen:
+            seen.add(row.submission_id)
+            kept.append(row)
+    return kept
+
+
 class BoardSlice(NamedTuple):
     boards: list[StoredBoard]
     after: str | None  # where the next page starts; None on the last page
@@ -333,6 +384,30 @@ class BoardStore(NoticeStore, Protocol):
         """Index a submission stored before these indexes (a board's recheck): its runs for
         every board (keeping the earliest time of each racer), each fingerprint and the
         skeleton claimed on its board where free. What other racers hold is returned."""
+
+    # ---- bulk import ------------------------------------------------------------------------
+
+    def present_submissions(self, board_id: str, keys: Sequence[tuple[str, str]]) -> set[str]:
+        """Which of these (racer key, submission id) are on the board: their submission ids."""
+
+    def authors_of(self, fingerprints: Sequence[str]) -> dict[str, list[RunAuthor]]:
+        """``run_authors`` of each fingerprint (earliest first), those with none left out."""
+
+    def holders(self, board_id: str, fingerprints: Sequence[str],
+                skeletons: Sequence[str]) -> tuple[dict[str, str], dict[str, str]]:
+        """Who holds each of these fingerprints, and each of these skeletons, on the board (by
+        racer key; those no one holds left out)."""
+
+    def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
+        """Write a batch of imported submissions, atomically (a store that cannot hold a batch
+        in one transaction commits it in parts, each whole, in order; each part's submissions
+        with their entries, tallies and rank counts): for each row in order, as
+        ``record_submission`` without limits would, the submission and its record unless its
+        id is on the board already (then the row changes nothing), and its entry if the racer
+        has none or it has a strictly lower rank key (counts, participants and the board's
+        version moved to match); then each of ``fingerprints`` and ``skeletons`` claimed for
+        its racer where no racer holds it, ``runs`` indexed as ``index_submission`` indexes
+        them, and ``audit`` appended. KeyError when there is no such board."""
 
     # ---- event-wide bans --------------------------------------------------------------------
 

@@ -48,6 +48,9 @@ from .base import (
     BoardSlice,
     FingerprintTaken,
     HistorySlice,
+    ImportBatch,
+    ImportedRow,
+    ImportWritten,
     Indexed,
     LimitReached,
     LookalikeTaken,
@@ -57,6 +60,7 @@ from .base import (
     SubmissionPage,
     claimable,
     delivered,
+    new_rows,
     page_token,
     read_page_token,
     stored_record,
@@ -157,6 +161,13 @@ CREATE TABLE IF NOT EXISTS event_settings (
 """
 
 EVENT_BANS = "bans"
+#: A racer's first time with a run: kept unless this one is earlier.
+INDEX_AUTHOR = ("INSERT INTO run_authors VALUES (?, ?, ?, ?, ?) ON CONFLICT (fingerprint, racer_key) "
+                "DO UPDATE SET first_at = excluded.first_at, board_id = excluded.board_id, "
+                "submission = excluded.submission WHERE excluded.first_at < first_at")
+INDEX_NEAR = "INSERT OR IGNORE INTO near_runs VALUES (?, ?, ?, ?, ?, ?, ?)"
+#: Values one statement binds at most (SQLite's default limit is 999 before 3.32).
+IN_CHUNK = 500
 
 BUSY_TIMEOUT_S = 30.0
 #: Rows an export reads at a time.
@@ -365,14 +376,10 @@ class SqliteStore:
     def _index_runs(db: sqlite3.Connection, submission: Submission, runs: Sequence[RunPrint]) -> None:
         at = ranking.timestamp(submission.submitted_at)
         for run in runs:
-            db.execute(
-                "INSERT INTO run_authors VALUES (?, ?, ?, ?, ?) ON CONFLICT (fingerprint, racer_key) "
-                "DO UPDATE SET first_at = excluded.first_at, board_id = excluded.board_id, "
-                "submission = excluded.submission WHERE excluded.first_at < first_at",
-                (run.fingerprint, submission.racer_key, at, submission.board_id,
-                 submission.submission_id))
+            db.execute(INDEX_AUTHOR, (run.fingerprint, submission.racer_key, at,
+                                      submission.board_id, submission.submission_id))
             if run.laps_ms:
-                db.execute("INSERT OR IGNORE INTO near_runs VALUES (?, ?, ?, ?, ?, ?, ?)",
+                db.execute(INDEX_NEAR,
                            (run.lane, run.laps_ms[0], run.fingerprint, submission.racer_key,
                             submission.board_id, submission.submission_id,
                             ",".join(map(str, run.laps_ms))))
@@ -671,6 +678,92 @@ class SqliteStore:
                                                 submission.racer_key, strict=False)
             return Indexed(holders, lookalike)
 
+    # ---- bulk import ----------------------------------------------------------------------
+
+    def present_submissions(self, board_id: str, keys: Sequence[tuple[str, str]]) -> set[str]:
+        return self._present(self._db, board_id, [submission_id for _, submission_id in keys])
+
+    @staticmethod
+    def _present(db: sqlite3.Connection, board_id: str, submission_ids: Sequence[str]) -> set[str]:
+        return {row[0] for row in _in_chunks(db, "SELECT submission_id FROM submissions WHERE "
+                                                 "board_id = ? AND submission_id IN ({})",
+                                             (board_id,), submission_ids)}
+
+    def authors_of(self, fingerprints: Sequence[str]) -> dict[str, list[RunAuthor]]:
+        authors: dict[str, list[RunAuthor]] = {}
+        for fingerprint, racer, first_at, board_id, submission_id in _in_chunks(
+                self._db, "SELECT fingerprint, racer_key, first_at, board_id, submission "
+                          "FROM run_authors WHERE fingerprint IN ({}) ORDER BY first_at",
+                (), fingerprints):
+            authors.setdefault(fingerprint, []).append(RunAuthor(
+                fingerprint=fingerprint, racer_key=racer, first_at=ranking.parse_timestamp(first_at),
+                board_id=board_id, submission_id=submission_id))
+        return authors
+
+    def holders(self, board_id: str, fingerprints: Sequence[str],
+                skeletons: Sequence[str]) -> tuple[dict[str, str], dict[str, str]]:
+        held = dict(_in_chunks(self._db, "SELECT fingerprint, racer_key FROM fingerprints "
+                                         "WHERE board_id = ? AND fingerprint IN ({})",
+                               (board_id,), fingerprints))
+        lookalikes = dict(_in_chunks(self._db, "SELECT skeleton, racer_key FROM skeletons "
+                                               "WHERE board_id = ? AND skeleton IN ({})",
+                                     (board_id,), skeletons))
+        return held, lookalikes
+
+    def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
+        with self._write() as db:
+            if db.execute("SELECT 1 FROM boards WHERE board_id = ?", (board_id,)).fetchone() is None:
+                raise KeyError(board_id)
+            rows = new_rows(batch.rows, self._present(db, board_id,
+                                                      [row.submission_id for row in batch.rows]))
+            db.executemany("INSERT INTO submissions VALUES (?, ?, ?, ?, ?, ?)",
+                           [(board_id, row.submission_id, row.racer_key, row.submitted_at,
+                             row.submission, row.record) for row in rows])
+            improved = self._import_entries(db, board_id, rows)
+            db.executemany("INSERT OR IGNORE INTO fingerprints VALUES (?, ?, ?)",
+                           [(board_id, fingerprint, racer) for fingerprint, racer in batch.fingerprints])
+            db.executemany("INSERT OR IGNORE INTO skeletons VALUES (?, ?, ?)",
+                           [(board_id, skeleton, racer) for skeleton, racer in batch.skeletons])
+            db.executemany(INDEX_AUTHOR, [(run.fingerprint, run.racer_key, run.submitted_at, board_id,
+                                           run.submission_id) for run in batch.runs])
+            db.executemany(INDEX_NEAR, [(run.lane, run.laps_ms[0], run.fingerprint, run.racer_key,
+                                         board_id, run.submission_id, ",".join(map(str, run.laps_ms)))
+                                        for run in batch.runs if run.laps_ms])
+            db.executemany("INSERT INTO audit VALUES (?, ?, ?)",
+                           [(e.board_id, e.event_id, e.model_dump_json()) for e in batch.audit])
+            return ImportWritten(created=len(rows), improved=improved)
+
+    def _import_entries(self, db: sqlite3.Connection, board_id: str,
+                        rows: Sequence[ImportedRow]) -> int:
+        """Each racer's best of their entries and these rows' (an entry changes only for a
+        strictly lower rank key), with the counts and participants moved to match; how many
+        entries changed."""
+        before = {racer: (score_key, rank_key) for racer, score_key, rank_key in _in_chunks(
+            db, "SELECT racer_key, score_key, rank_key FROM entries WHERE board_id = ? "
+                "AND racer_key IN ({})", (board_id,), list({row.racer_key for row in rows}))}
+        best: dict[str, ImportedRow] = {}
+        for row in rows:
+            current = best[row.racer_key].rank_key if row.racer_key in best else (
+                before[row.racer_key][1] if row.racer_key in before else None)
+            if current is None or row.rank_key < current:
+                best[row.racer_key] = row
+        if not best:
+            return 0
+        db.executemany("INSERT OR REPLACE INTO entries VALUES (?, ?, ?, ?, ?)",
+                       [(board_id, racer, row.score_key, row.rank_key, row.entry)
+                        for racer, row in best.items()])
+        moves: dict[str, dict[str, int]] = {}
+        for racer, row in best.items():
+            removed = before[racer][0] if racer in before else None
+            for node, children in rank_buckets.changes(row.score_key, removed).items():
+                counts = moves.setdefault(node, {})
+                for child, change in children.items():
+                    counts[child] = counts.get(child, 0) + change
+        self._move_counts(db, board_id, moves)
+        db.execute("UPDATE boards SET participants = participants + ?, version = version + 1 "
+                   "WHERE board_id = ?", (sum(racer not in before for racer in best), board_id))
+        return len(best)
+
     # ---- event-wide bans ------------------------------------------------------------------
 
     def event_bans(self) -> tuple[EventBans, int]:
@@ -773,6 +866,15 @@ def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
     last = tally.last_submitted_at
     if limits.cooldown_s and last is not None and (limits.now - last).total_seconds() < limits.cooldown_s:
         raise LimitReached(tally)
+
+
+def _in_chunks(db: sqlite3.Connection, query: str, fixed: tuple[str, ...],
+               values: Sequence[str]) -> Iterator[Any]:
+    """The rows of ``query`` (whose ``IN ({})`` takes the values), for every value, a chunk
+    of values at a time."""
+    for start in range(0, len(values), IN_CHUNK):
+        chunk = values[start:start + IN_CHUNK]
+        yield from db.execute(query.format(",".join("?" * len(chunk))), (*fixed, *chunk))
 
 
 BOARD_COLUMNS = "board, participants, version, settings_version"

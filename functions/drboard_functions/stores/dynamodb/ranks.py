@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import secrets
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -69,6 +69,8 @@ READ_ATTEMPTS = 3  # of reading a rank's counters together, while pushes move th
 # operator's build, which may take longer than a push function may.
 LAZY_BUILD_MAX_RACERS = 10_000
 NOTHING_COUNTED = FIRST_ENTRY  # every entry's rank key sorts after it
+#: An entry's (score key, rank key).
+Keys = tuple[str, str]
 
 
 @dataclass(frozen=True)
@@ -138,6 +140,27 @@ class RankCounters:
             return self._updates(board_id, state.building, state.counted(added),
                                  state.counted(removed))
         return []
+
+    def replaced(self, board_id: str, state: RankState,
+                 changes: Sequence[tuple[Keys | None, Keys | None]]) -> list[TransactWriteItemTypeDef]:
+        """The counter updates for several entries replaced at once, each (added, removed) as
+        (score key, rank key) or None, merged by counter item (a transaction writes an item
+        once): in the generation in use, or in the one being built for the entries it counted."""
+        generation = state.generation or state.building
+        if generation is None:
+            return []
+        moves: dict[str, dict[str, int]] = {}
+        for added, removed in changes:
+            if state.generation is None:
+                added = added if added and added[1] <= state.built_to else None
+                removed = removed if removed and removed[1] <= state.built_to else None
+            for node, children in rank_buckets.changes(added[0] if added else None,
+                                                       removed[0] if removed else None).items():
+                merged = moves.setdefault(node, {})
+                for child, change in children.items():
+                    merged[child] = merged.get(child, 0) + change
+        return [self._add(board_id, generation, node, kept) for node, children in moves.items()
+                if (kept := {child: n for child, n in children.items() if n})]
 
     def board_change(self, board_id: str, change: int, state: RankState) -> TransactWriteItemTypeDef:
         """The board's number of racers changed by ``change``, and its version bumped, on

@@ -43,6 +43,8 @@ from ..base import (
     BoardHasEntries,
     BoardSlice,
     HistorySlice,
+    ImportBatch,
+    ImportWritten,
     Indexed,
     RankBuild,
     StoredBoard,
@@ -53,6 +55,7 @@ from ..base import (
     read_page_token,
     stored_record,
 )
+from .bulk import BulkWrite
 from .codecs import (
     ALIAS_PARTITION,
     BANS_SK,
@@ -87,6 +90,7 @@ from .codecs import (
     run_author_of,
     run_partition,
     skeleton_item,
+    skeleton_sk,
     stored_board,
     submission_item,
     submission_of,
@@ -310,6 +314,29 @@ class DynamoDbStore:
             held = self.get_item(board_id, item["sk"]["S"])
             return held["racer_key"]["S"] if held else None
         return None
+
+    # ---- bulk import ----------------------------------------------------------------------
+
+    def present_submissions(self, board_id: str, keys: Sequence[tuple[str, str]]) -> set[str]:
+        found = self.get_items(board_id, [submission_sk(racer, submission_id)
+                                          for racer, submission_id in keys])
+        return {sk.rpartition("#")[2] for sk in found}
+
+    def authors_of(self, fingerprints: Sequence[str]) -> dict[str, list[RunAuthor]]:
+        found = {fingerprint: self.run_authors(fingerprint) for fingerprint in fingerprints}
+        return {fingerprint: authors for fingerprint, authors in found.items() if authors}
+
+    def holders(self, board_id: str, fingerprints: Sequence[str],
+                skeletons: Sequence[str]) -> tuple[dict[str, str], dict[str, str]]:
+        found = self.get_items(board_id, [fingerprint_sk(f) for f in fingerprints]
+                               + [skeleton_sk(s) for s in skeletons])
+        return ({f: found[fingerprint_sk(f)]["racer_key"]["S"] for f in fingerprints
+                 if fingerprint_sk(f) in found},
+                {s: found[skeleton_sk(s)]["racer_key"]["S"] for s in skeletons
+                 if skeleton_sk(s) in found})
+
+    def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
+        return BulkWrite(self, board_id, batch).run()
 
     # ---- event-wide bans ------------------------------------------------------------------
 
@@ -707,6 +734,25 @@ class DynamoDbStore:
         return stored_record(record_json(item)) if item else None
 
     # ---- plumbing -------------------------------------------------------------------------
+
+    def get_items(self, board_id: str, sks: Sequence[str]) -> dict[str, Item]:
+        """The board's items with these sort keys (those there), by sort key, read consistently
+        a hundred at a time."""
+        found: dict[str, Item] = {}
+        keys = [key(board_id, sk) for sk in dict.fromkeys(sks)]
+        for start in range(0, len(keys), BATCH_GET_KEYS):
+            pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
+                                         "ConsistentRead": True}}
+            attempt = 0
+            while pending:
+                if attempt:
+                    backoff(attempt)
+                answer = self.client.batch_get_item(RequestItems=pending)
+                for item in answer["Responses"].get(self.table, []):
+                    found[item["sk"]["S"]] = item
+                pending = answer.get("UnprocessedKeys") or None
+                attempt += 1
+        return found
 
     def get_item(self, board_id: str, sk: str) -> Item | None:
         response = self.client.get_item(TableName=self.table, ConsistentRead=True,

@@ -1,0 +1,269 @@
+"""A board's export imported in bulk (`drboard import` on the embedded board): every exported
+submission is checked and prepared once — what importing it writes — before anything is
+written; then the prepared submissions are written a batch at a time, one transaction each.
+
+A batch writes what replaying its submissions one by one would (``Transfer.import_submission``):
+each submission not on the board yet, scored by the board's rules, the racer's entry when it is
+their best, an ``import`` event in the audit trail, its runs indexed for every board, its
+fingerprints and its alias's skeleton claimed on the board where free; and, as an import is an
+organiser's replay, never a refusal for a copied run or a lookalike alias: what replaying would
+flag for the organiser is flagged (both runs of a copy, a near-copy, a lookalike). A batch reads
+what the boards hold of its submissions in a few reads (those already on the board, their runs'
+authors, the holders of their fingerprints and skeletons, the runs near theirs), replays its
+submissions in memory, in order, from there, and writes the outcome at once.
+
+What is checked of each submission here: that it belongs on the board, that its record is
+within the record's bound in bytes, and that its submission id is its content's hash (the
+record's schema and bounds are the caller's to check, as for every record the service takes).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from datetime import datetime
+from typing import TYPE_CHECKING, NamedTuple
+
+from drboard_assembler.aliases import confusable_skeleton
+from drboard_assembler.record import content_hash
+
+from .. import ranking
+from ..errors import InvalidSubmission, StoreBusy
+from ..identity import Caller
+from ..models.domain import AuditEvent, Board, Entry, NearRun, RunAuthor, Submission, with_flag
+from ..models.requests import ImportedSubmission
+from ..models.views import BoardView
+from ..stores.base import ImportBatch, ImportedRow, IndexedRun, RecordArchive
+from .boards import BoardKeeper, check_belongs
+from .copies import COPIED, LOOKALIKE, NEAR_COPY, NEAR_MS, run_prints, same_laps
+from .pushing import check_record_size, keep_in_archive, scored_write
+
+if TYPE_CHECKING:
+    from .transfer import Transfer
+
+#: A run of a prepared submission: its fingerprint, its lane, and its complete laps' times,
+#: sorted, when it has enough of them to be compared (else None).
+Run = tuple[str, str, tuple[int, ...] | None]
+#: A submission, by where it is: (board id, racer key, submission id).
+Where = tuple[str, str, str]
+
+
+class PreparedSubmission(NamedTuple):
+    """An exported submission checked for its board, and what importing it writes."""
+
+    row: ImportedRow
+    racer: str
+    runs: tuple[Run, ...]
+    fingerprints: tuple[str, ...]  # of its evaluations that completed a lap: claimed on the board
+    skeleton: str  # its alias's confusable skeleton: held on the board
+
+
+class ImportTally(NamedTuple):
+    created: int
+    duplicates: int
+
+
+class BulkImport:
+    """One import of an export into one board: ``prepare`` every submission (nothing is
+    written), then ``open`` the board and ``load`` the prepared submissions batch by batch."""
+
+    def __init__(self, transfer: Transfer, keeper: BoardKeeper, archive: RecordArchive | None,
+                 board: Board, caller: Caller) -> None:
+        self.transfer = transfer
+        self.keeper = keeper
+        self.store = keeper.store
+        self.archive = archive
+        #: The board imported into: the one with the export's (or the chosen) id if it exists,
+        #: with its own settings; else the exported board, which ``open`` creates.
+        self.board = board
+        self.caller = caller
+
+    def prepare(self, item: ImportedSubmission) -> PreparedSubmission:
+        """Check an exported submission for the board (BoardMismatch, SubmissionTooLarge,
+        InvalidSubmission when its id is not its content's hash) and prepare what importing it
+        writes. Nothing is written, but the record is archived (where the board archives)."""
+        record = item.record
+        check_belongs(record, self.board)
+        stored = check_record_size(record)
+        if content_hash(record) != record.submission_id:
+            raise InvalidSubmission("the record's submission_id does not match its content",
+                                    detail=[{"loc": "record.submission_id", "type": "value_error",
+                                             "msg": "does not match the record's content"}])
+        keep_in_archive(self.archive, self.board.board_id, record)
+        submission, entry = scored_write(record, self.board, item.submitted_at)
+        prints = run_prints(record)
+        return PreparedSubmission(
+            row=ImportedRow(submission_id=record.submission_id, racer_key=submission.racer_key,
+                            submitted_at=ranking.timestamp(item.submitted_at),
+                            score_key=entry.score_key, rank_key=entry.rank_key,
+                            submission=submission.model_dump_json(), entry=entry.model_dump_json(),
+                            record=stored),
+            racer=record.racer,
+            runs=tuple((p.fingerprint, p.lane, tuple(p.laps_ms) if p.laps_ms else None)
+                       for p in prints),
+            fingerprints=tuple(sorted({p.fingerprint for p in prints})),
+            skeleton=confusable_skeleton(record.racer))
+
+    def open(self) -> tuple[BoardView, bool]:
+        """Create the board unless it exists (as ``import_board``); whether it was created."""
+        view, created = self.transfer.import_board(self.board, self.caller)
+        self._check_rules()
+        return view, created
+
+    def load(self, batch: Sequence[PreparedSubmission]) -> ImportTally:
+        """Write a batch of prepared submissions, in one transaction (see the module)."""
+        self._check_rules()
+        replay = _Replay(self, batch)
+        written = self.store.import_batch(self.board.board_id, replay.batch())
+        replay.flag_the_others()
+        return ImportTally(created=written.created, duplicates=len(batch) - written.created)
+
+    def _check_rules(self) -> None:
+        stored = self.keeper.require(self.board.board_id).board
+        if stored.rules != self.board.rules:
+            raise StoreBusy(f"the rules of {self.board.board_id!r} changed while the export was "
+                            "checked; import it again")
+
+
+class _Replay:
+    """A batch replayed in memory, in order, from what the boards hold when it starts."""
+
+    def __init__(self, load: BulkImport, batch: Sequence[PreparedSubmission]) -> None:
+        self.load = load
+        self.board_id = board_id = load.board.board_id
+        store = load.store
+        self.present = store.present_submissions(
+            board_id, [(p.row.racer_key, p.row.submission_id) for p in batch])
+        self.authors = {fingerprint: {a.racer_key: a for a in authors}
+                        for fingerprint, authors in store.authors_of(
+                            sorted({run[0] for p in batch for run in p.runs})).items()}
+        self.fingerprint_holders, self.skeleton_holders = store.holders(
+            board_id, sorted({f for p in batch for f in p.fingerprints}),
+            sorted({p.skeleton for p in batch}))
+        self.near: dict[str, list[tuple[int, NearRun]]] = {}  # this batch's runs, by lane
+        self.flags: dict[Where, list[str]] = {}  # flags added, in order, by where
+        self.written: dict[str, PreparedSubmission] = {}
+        self.claims: list[tuple[str, str]] = []
+        self.held: list[tuple[str, str]] = []
+        self.runs: list[IndexedRun] = []
+        self.audit: list[AuditEvent] = []
+        self.later: list[tuple[Where, str, str]] = []  # flags on other batches' or boards' runs
+        for prepared in batch:
+            row = prepared.row
+            if row.submission_id not in self.present and row.submission_id not in self.written:
+                self.written[row.submission_id] = prepared
+                self._import(prepared)
+
+    def _import(self, prepared: PreparedSubmission) -> None:
+        row = prepared.row
+        at = ranking.parse_timestamp(row.submitted_at)
+        self._event("import", prepared.racer, row.submission_id)
+        for fingerprint, lane, laps in prepared.runs:
+            self._index(row, fingerprint, lane, laps, at)
+        for fingerprint in prepared.fingerprints:
+            if fingerprint not in self.fingerprint_holders:
+                self.fingerprint_holders[fingerprint] = row.racer_key
+                self.claims.append((fingerprint, row.racer_key))
+        holder = self.skeleton_holders.get(prepared.skeleton)
+        if holder is None:
+            self.skeleton_holders[prepared.skeleton] = row.racer_key
+            self.held.append((prepared.skeleton, row.racer_key))
+        elif holder != row.racer_key:
+            self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+                       LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
+        for fingerprint, lane, laps in prepared.runs:
+            self._copies_of(prepared, fingerprint, lane, laps)
+
+    def _index(self, row: ImportedRow, fingerprint: str, lane: str, laps: tuple[int, ...] | None,
+               at: datetime) -> None:
+        """The run indexed as the store indexes it: its racer's earliest time with it kept,
+        and its laps for near-copies (once per racer and board)."""
+        self.runs.append(IndexedRun(fingerprint, lane, laps, row.racer_key, row.submitted_at,
+                                    row.submission_id))
+        authors = self.authors.setdefault(fingerprint, {})
+        mine = authors.get(row.racer_key)
+        if mine is None or at < mine.first_at:
+            authors[row.racer_key] = RunAuthor(fingerprint=fingerprint, racer_key=row.racer_key,
+                                               first_at=at, board_id=self.board_id,
+                                               submission_id=row.submission_id)
+        if laps:
+            lane_runs = self.near.setdefault(lane, [])
+            if not any(best == laps[0] and near.fingerprint == fingerprint
+                       and near.racer_key == row.racer_key for best, near in lane_runs):
+                lane_runs.append((laps[0], NearRun(
+                    fingerprint=fingerprint, racer_key=row.racer_key, board_id=self.board_id,
+                    submission_id=row.submission_id, laps_ms=list(laps))))
+
+    def _copies_of(self, prepared: PreparedSubmission, fingerprint: str, lane: str,
+                   laps: tuple[int, ...] | None) -> None:
+        """As ``Transfer._copies_of``: the copies of the run (every author but its first, all of
+        them when the first are tied), and a near-copy of another racer's run."""
+        row = prepared.row
+        authors = sorted(self.authors[fingerprint].values(), key=lambda author: author.first_at)
+        if len(authors) > 1:
+            first = authors[0]
+            tied = [a for a in authors if a.first_at == first.first_at]
+            for author in authors[1:] if len(tied) == 1 else authors:
+                self._flag((author.board_id, author.racer_key, author.submission_id), None, COPIED,
+                           f"the same laps as {first.racer_key!r}'s on {first.board_id!r}, "
+                           "pushed first")
+        if laps:
+            for near in self._near(lane, laps[0]):
+                if (near.racer_key != row.racer_key and near.fingerprint != fingerprint
+                        and same_laps(list(laps), near.laps_ms)):
+                    self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+                               NEAR_COPY, f"laps within {NEAR_MS} ms of {near.racer_key!r}'s on "
+                                          f"{near.board_id!r}")
+                    return
+
+    def _near(self, lane: str, best_ms: int) -> list[NearRun]:
+        """The indexed runs of the lane near ``best_ms`` (those stored, and this batch's), in
+        the order the store gives them: by best lap, fingerprint, racer and board."""
+        stored = [(near.laps_ms[0], near) for near in
+                  self.load.store.near_runs(lane, best_ms, NEAR_MS)]
+        batch = [(best, near) for best, near in self.near.get(lane, ())
+                 if abs(best - best_ms) <= NEAR_MS]
+        return [near for _, near in sorted(stored + batch, key=lambda pair: (
+            pair[0], pair[1].fingerprint, pair[1].racer_key, pair[1].board_id))]
+
+    def _flag(self, where: Where, racer: str | None, flag: str, why: str) -> None:
+        """Flag a run once: this batch's when it writes it, another's after the batch."""
+        flags = self.flags.setdefault(where, [])
+        if flag in flags:
+            return
+        flags.append(flag)
+        board_id, _, submission_id = where
+        if board_id == self.board_id and submission_id in self.written:
+            self._event("flag", racer or self.written[submission_id].racer, submission_id,
+                        f"{flag}: {why}")
+        else:
+            self.later.append((where, flag, why))
+
+    def _event(self, action: str, racer: str, submission_id: str, detail: str = "") -> None:
+        keeper = self.load.keeper
+        self.audit.append(keeper.event(self.board_id, action, self.load.caller,  # type: ignore[arg-type]
+                                       keeper.clock(), racer=racer, submission_id=submission_id,
+                                       detail=detail))
+
+    def batch(self) -> ImportBatch:
+        return ImportBatch(rows=[self._flagged(p.row) for p in self.written.values()],
+                           fingerprints=self.claims, skeletons=self.held, runs=self.runs,
+                           audit=self.audit)
+
+    def _flagged(self, row: ImportedRow) -> ImportedRow:
+        flags = self.flags.get((self.board_id, row.racer_key, row.submission_id))
+        if not flags:
+            return row
+        submission = Submission.model_validate_json(row.submission)
+        entry = Entry.model_validate_json(row.entry)
+        for flag in flags:
+            submission, entry = with_flag(submission, flag), with_flag(entry, flag)
+        return row._replace(submission=submission.model_dump_json(), entry=entry.model_dump_json())
+
+    def flag_the_others(self) -> None:
+        """Flag the runs of other batches and other boards this batch showed to be copies."""
+        store, keeper = self.load.store, self.load.keeper
+        for (board_id, racer_key, submission_id), flag, why in self.later:
+            other = store.get_submission(board_id, racer_key, submission_id)
+            if other is not None and store.flag_submission(board_id, racer_key, submission_id, flag):
+                keeper.audit(board_id, "flag", self.load.caller, racer=other.racer,
+                             submission_id=submission_id, detail=f"{flag}: {why}")

@@ -1,0 +1,184 @@
+"""An import in bulk leaves the boards exactly as replaying the same submissions one by one does:
+the standings, every racer's history with its flags, the claims of fingerprints and aliases,
+the runs' index and the audit trail; across batches, into a new board or one with entries, on
+SQLite and on DynamoDB (moto)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+from typing import Any
+
+import boto3
+import pytest
+from drboard_assembler.record import Record
+from drboard_functions.errors import BoardMismatch, InvalidSubmission, SubmissionTooLarge
+from drboard_functions.models.domain import Board
+from drboard_functions.models.requests import BoardSpec, ImportedSubmission
+from drboard_functions.service import LeaderboardService, racer_key
+from drboard_functions.service.copies import run_prints
+from drboard_functions.service.loading import ImportTally
+from drboard_functions.stores.base import BoardStore
+from drboard_functions.stores.dynamodb import DynamoDbStore
+from drboard_functions.stores.sqlite import SqliteStore
+from moto import mock_aws
+
+from tests.awskit import REGION
+from tests.recordkit import copy_of, make_record
+from tests.tablekit import create_board_table
+
+T0 = datetime(2026, 3, 1, 12, 0, tzinfo=UTC)
+TRACK = "reInvent2019_track"
+FINALS = "club-finals"
+BOB = make_record("Bob", [(9100, 100), (9300, 100), (9500, 100)])
+ADA_FAST = make_record("Ada", [(8800, 100), (8900, 100), (9000, 100)], model="fast")
+VETERAN = make_record("Veteran", [(9700, 100), (9750, 100), (9800, 100)])
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = T0 + timedelta(days=30)
+
+    def __call__(self) -> datetime:
+        self.now += timedelta(milliseconds=1)
+        return self.now
+
+
+def at(minutes: int) -> datetime:
+    return T0 + timedelta(minutes=minutes)
+
+
+def item(record: Record, minutes: int) -> ImportedSubmission:
+    return ImportedSubmission(submitted_at=at(minutes), record=record)
+
+
+#: An export's submissions, in its order (by submission id, not by time): copies whose first
+#: author comes later in the file, a near-copy, lookalike aliases, a run already on another
+#: board (pushed there later, and earlier), a racer bettering and worsening, a duplicate.
+ITEMS = [
+    item(BOB, 10),
+    item(make_record("Ada", [(9900, 100), (9950, 100), (9990, 100)], model="slow"), 1),
+    item(copy_of(BOB, "Copycat"), 5),  # pushed before Bob: Bob's is the copy
+    item(ADA_FAST, 20),
+    item(make_record("Nearly", [(8802, 100), (8897, 100), (9004, 100)]), 30),
+    item(make_record("Ollie", [(12000, 100)]), 2),
+    item(make_record("0llie", [(12100, 100)]), 3),
+    item(make_record("Ada", [(15000, 100)], model="worse"), 40),
+    item(copy_of(VETERAN, "Elder"), -60),  # before the veteran's own push on another board
+    item(copy_of(VETERAN, "Thief"), 50),
+    item(BOB, 10),
+    item(make_record("Offtrack", [(3000, 40)]), 6),
+    item(make_record("Twin", [(9100, 100), (9300, 100), (9500, 100)], model="twin"), 10),
+    item(make_record("TieA", [(9600, 100), (9610, 100), (9620, 100)]), 7),
+    item(copy_of(make_record("TieA", [(9600, 100), (9610, 100), (9620, 100)]), "TieB"), 7),
+    item(make_record("Bob", [(9100, 100), (9300, 100), (9500, 100)], model="again"), 4),
+]
+
+
+def new_store(kind: str, path: Path) -> Iterator[BoardStore]:
+    if kind == "sqlite":
+        store = SqliteStore(path)
+        yield store
+        store.close()
+        return
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        yield DynamoDbStore(create_board_table(client, "boards"), client)
+
+
+def prepared_board(store: BoardStore, with_entries: bool) -> LeaderboardService:
+    """A board as found before the import: the veteran's run on the track's board, and the
+    finals board with racers of its own (or no finals board yet)."""
+    service = LeaderboardService(store, clock=Clock())
+    service.push(VETERAN)
+    if with_entries:
+        service.create_board(BoardSpec(board_id=FINALS, title="Finals", track="reInvent2019"))
+        service.push(make_record("Ollie", [(11000, 100)], model="own"), FINALS)
+        service.push(make_record("Ada", [(9000, 100)], model="own"), FINALS)
+    return service
+
+
+def exported_board() -> Board:
+    return Board(board_id=FINALS, track=TRACK, title="Finals", kind="named", created_at=T0)
+
+
+def replayed(service: LeaderboardService, items: Sequence[ImportedSubmission]) -> list[str]:
+    board_id = service.import_board(exported_board())[0].board_id
+    return [service.import_submission(board_id, one).status for one in items]
+
+
+def loaded(service: LeaderboardService, items: Sequence[ImportedSubmission], batch: int) -> ImportTally:
+    bulk = service.bulk_import(exported_board())
+    prepared = [bulk.prepare(one) for one in items]
+    bulk.open()
+    tallies = [bulk.load(prepared[start:start + batch]) for start in range(0, len(prepared), batch)]
+    return ImportTally(sum(t.created for t in tallies), sum(t.duplicates for t in tallies))
+
+
+def state(store: BoardStore) -> dict[str, Any]:
+    """Everything an import writes, in a form two stores compare."""
+    records = [one.record for one in ITEMS]
+    fingerprints = sorted({p.fingerprint for r in records for p in run_prints(r)})
+    racers = sorted({racer_key(r.racer) for r in records} | {"veteran", "ollie", "ada"})
+    prints = {p.fingerprint: p for r in records for p in run_prints(r)}
+    return {
+        "entries": {board: [(e.racer, e.submission_id, e.score.flags, e.rank_key)
+                            for e in store.top(board, 100)] for board in (FINALS, TRACK)},
+        "participants": [store.get_board(board).participants  # type: ignore[union-attr]
+                         for board in (FINALS, TRACK)],
+        "history": {r: [(s.board_id, s.submission_id, s.submitted_at, s.score.flags)
+                        for s in store.history(r)] for r in racers},
+        "tallies": {r: store.tally(FINALS, r) for r in racers},
+        "holders": [store.holders(board, fingerprints, [r for r in racers] + ["0llie", "ollie"])
+                    for board in (FINALS, TRACK)],
+        "authors": {f: sorted((a.racer_key, a.first_at, a.board_id, a.submission_id) for a in authors)
+                    for f, authors in store.authors_of(fingerprints).items()},
+        "near": sorted((n.fingerprint, n.racer_key, n.board_id, n.submission_id)
+                       for p in prints.values() if p.laps_ms
+                       for n in store.near_runs(p.lane, p.laps_ms[0], 5)),
+        "audit": {board: sorted((e.action, e.racer or "", e.submission_id or "", e.detail)
+                                for e in store.audit(board, None, 1000).events)
+                  for board in (FINALS, TRACK)},
+        "ranks": [store.count_better(FINALS, e.score_key) for e in store.top(FINALS, 100)],
+    }
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "dynamodb"])
+@pytest.mark.parametrize("with_entries", [False, True], ids=["new board", "board with entries"])
+def test_an_import_in_bulk_writes_what_replaying_it_writes(tmp_path: Path, kind: str,
+                                                           with_entries: bool) -> None:
+    for store in new_store(kind, tmp_path / "replayed.db"):
+        replay = prepared_board(store, with_entries)
+        statuses = replayed(replay, ITEMS)
+        expected = state(store)
+        again = replayed(replay, ITEMS)
+        expected_again = state(store)
+    for store in new_store(kind, tmp_path / "loaded.db"):
+        bulk = prepared_board(store, with_entries)
+        assert loaded(bulk, ITEMS, batch=3) == ImportTally(statuses.count("created"),
+                                                           statuses.count("duplicate"))
+        assert state(store) == expected
+        assert loaded(bulk, ITEMS, batch=5) == ImportTally(0, len(again))
+        assert state(store) == expected_again
+    flagged = {racer: flags for racer, _, flags, _ in expected["entries"][FINALS] if flags}
+    assert flagged["Copycat"] == ["copied-run"] and "Bob" not in flagged, "Bob pushed it first"
+    assert flagged["Nearly"] == ["near-copy"]
+    assert "lookalike" in flagged["0llie"] and flagged["Thief"] == ["copied-run"]
+    assert flagged["TieA"] == flagged["TieB"] == ["copied-run"], "pushed at the same moment"
+    assert expected["entries"][TRACK][0][2] == ["copied-run"], "the veteran's run, copied earlier"
+
+
+def test_an_import_in_bulk_checks_each_submission_before_writing_anything(tmp_path: Path) -> None:
+    for store in new_store("sqlite", tmp_path / "board.db"):
+        service = LeaderboardService(store, clock=Clock())
+        bulk = service.bulk_import(exported_board())
+        tampered = BOB.model_copy(update={"model_name": "edited after the export"})
+        with pytest.raises(InvalidSubmission, match="submission_id"):
+            bulk.prepare(ImportedSubmission.model_construct(submitted_at=at(1), record=tampered))
+        with pytest.raises(BoardMismatch):
+            bulk.prepare(item(make_record("Ada", track="Oval_track"), 1))
+        huge = make_record("Ada", runs=[[(9000 + n, 100)] * 100 for n in range(50)])
+        with pytest.raises(SubmissionTooLarge):
+            bulk.prepare(item(huge, 1))
+        assert service.boards() == []
