@@ -48,7 +48,9 @@ Phase = Callable[[str, int | None], Callable[[int], None]]
 
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
 #: Submissions an import in bulk writes in one transaction.
-IMPORT_BATCH = 500
+IMPORT_BATCH = 2000
+#: Lines checked and prepared at a time.
+CHUNK_LINES = 500
 #: How an import in bulk reads an export's records: as the board's own stored records are read
 #: (schema and bounds; not today's rules of aliases, text, tracks and lap floors).
 IMPORT_CHECKS = {"stored": True}
@@ -228,11 +230,7 @@ def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board
         summary = ImportSummary(board=view, board_created=created, entry_lines=entries)
         advance = phase("Importing submissions", submissions)
         spool.seek(0)
-        while True:
-            try:
-                batch: list[PreparedSubmission] = pickle.load(spool)
-            except EOFError:
-                break
+        for batch in _batches(spool):
             tally = bulk.load(batch)
             summary.created += tally.created
             summary.duplicates += tally.duplicates
@@ -243,46 +241,97 @@ def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board
 
 def _prepare(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
              spool: IO[bytes], phase: Phase) -> tuple[BulkImport, int, int]:
-    """Check every line and prepare every submission into ``spool``, a batch per pickle: the
-    import, and how many entry and submission lines the file holds."""
+    """Check every line and prepare every submission into ``spool`` (a pickled list per chunk
+    of lines): the import, and how many entry and submission lines the file holds."""
     advance = phase("Checking the export", _size(handle))
-    bulk: BulkImport | None = None
-    exported: Board | None = None
-    entries = submissions = 0
-    batch: list[PreparedSubmission] = []
-    read = 0
-    for number, line in _parsed_lines(name, handle, IMPORT_CHECKS):
-        where = f"{name}:{number}"
-        if isinstance(line, ExportedBoard):
-            if exported is not None:
-                raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
-            exported = line.board
-            board = _renamed(exported, board_id) if board_id and board_id != exported.board_id else exported
-            bulk = service.bulk_import(board)
-            _check_same_track(bulk.board, board)
-        elif bulk is None or exported is None:
-            raise BadExportFile(f"{where}: kind: the first line must be the board (\"kind\": \"board\")")
-        elif isinstance(line, ExportedEntry):
-            entries += 1
-        else:
-            _check_submission(where, line, exported)
-            item = ImportedSubmission.model_construct(submitted_at=line.submission.submitted_at,
-                                                      record=line.record)
-            try:
-                batch.append(bulk.prepare(item))
-            except DomainError as error:
-                raise BadExportFile(f"{where}: {_refusal(error)}") from None
-            submissions += 1
-            if len(batch) == IMPORT_BATCH:
-                pickle.dump(batch, spool, protocol=pickle.HIGHEST_PROTOCOL)
-                batch = []
-        advance(handle.tell() - read)
-        read = handle.tell()
-    if bulk is None:
+    first = _first_line(name, handle)
+    if first is None:
         raise BadExportFile(f"{name}: the file is empty: an export starts with its board line")
-    if batch:
-        pickle.dump(batch, spool, protocol=pickle.HIGHEST_PROTOCOL)
+    number, line = first
+    if not isinstance(line, ExportedBoard):
+        raise BadExportFile(f"{name}:{number}: kind: the first line must be the board "
+                            "(\"kind\": \"board\")")
+    exported = line.board
+    board = _renamed(exported, board_id) if board_id and board_id != exported.board_id else exported
+    bulk = service.bulk_import(board)
+    _check_same_track(bulk.board, board)
+    entries = submissions = 0
+    for chunk in _chunks(name, handle, number):
+        pickled, counts, read = _prepared_chunk(name, exported, bulk, chunk)
+        spool.write(pickled)
+        entries += counts[0]
+        submissions += counts[1]
+        advance(read)
     return bulk, entries, submissions
+
+
+def _batches(spool: IO[bytes]) -> Iterator[list[PreparedSubmission]]:
+    """The prepared submissions, IMPORT_BATCH at a time (the last batch may be smaller)."""
+    batch: list[PreparedSubmission] = []
+    while True:
+        try:
+            batch += pickle.load(spool)
+        except EOFError:
+            break
+        while len(batch) >= IMPORT_BATCH:
+            yield batch[:IMPORT_BATCH]
+            batch = batch[IMPORT_BATCH:]
+    if batch:
+        yield batch
+
+
+def _first_line(name: str, handle: IO[bytes]) -> tuple[int, ExportLine] | None:
+    for number, raw in _numbered(name, handle, 0):
+        return number, _parsed(f"{name}:{number}", raw)
+    return None
+
+
+def _chunks(name: str, handle: IO[bytes], after: int) -> Iterator[list[tuple[int, bytes]]]:
+    """The lines after line ``after``, numbered, CHUNK_LINES at a time."""
+    chunk: list[tuple[int, bytes]] = []
+    for numbered in _numbered(name, handle, after):
+        chunk.append(numbered)
+        if len(chunk) == CHUNK_LINES:
+            yield chunk
+            chunk = []
+    if chunk:
+        yield chunk
+
+
+def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, bytes]]:
+    """The file's lines that are not blank, numbered from ``after`` + 1, each within the bound."""
+    number = after
+    while raw := handle.readline(MAX_LINE_BYTES + 1):
+        number += 1
+        if len(raw) > MAX_LINE_BYTES:
+            raise BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
+        if raw.strip():
+            yield number, raw
+
+
+def _prepared_chunk(name: str, exported: Board, bulk: BulkImport,
+                    chunk: list[tuple[int, bytes]]) -> tuple[bytes, tuple[int, int], int]:
+    """Check a chunk of an export's lines after its board line and prepare its submissions:
+    the pickled list of them, the (entry, submission) lines counted, and the bytes read."""
+    prepared: list[PreparedSubmission] = []
+    entries = 0
+    for number, raw in chunk:
+        where = f"{name}:{number}"
+        line = _parsed(where, raw, IMPORT_CHECKS)
+        if isinstance(line, ExportedBoard):
+            raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
+        if isinstance(line, ExportedEntry):
+            entries += 1
+            continue
+        _check_submission(where, line, exported)
+        item = ImportedSubmission.model_construct(submitted_at=line.submission.submitted_at,
+                                                  record=line.record)
+        try:
+            prepared.append(bulk.prepare(item))
+        except DomainError as error:
+            raise BadExportFile(f"{where}: {_refusal(error)}") from None
+    return (pickle.dumps(prepared, protocol=pickle.HIGHEST_PROTOCOL), (entries, len(prepared)),
+            sum(len(raw) for _, raw in chunk))
 
 
 def _refusal(error: DomainError) -> str:
@@ -299,20 +348,16 @@ def _size(handle: IO[bytes]) -> int | None:
         return None
 
 
-def _parsed_lines(name: str, handle: IO[bytes],
-                  context: dict[str, Any] | None = None) -> Iterator[tuple[int, ExportLine]]:
-    number = 0
-    while raw := handle.readline(MAX_LINE_BYTES + 1):
-        number += 1
-        where = f"{name}:{number}"
-        if len(raw) > MAX_LINE_BYTES:
-            raise BadExportFile(f"{where}: the line is over {MAX_LINE_BYTES >> 20} MiB")
-        if not raw.strip():
-            continue
-        try:
-            yield number, _LINE.validate_json(raw, context=context)
-        except ValidationError as error:
-            raise BadExportFile(f"{where}: {_problem(error)}") from None
+def _parsed_lines(name: str, handle: IO[bytes]) -> Iterator[tuple[int, ExportLine]]:
+    for number, raw in _numbered(name, handle, 0):
+        yield number, _parsed(f"{name}:{number}", raw)
+
+
+def _parsed(where: str, raw: bytes, context: dict[str, Any] | None = None) -> ExportLine:
+    try:
+        return _LINE.validate_json(raw, context=context)
+    except ValidationError as error:
+        raise BadExportFile(f"{where}: {_problem(error)}") from None
 
 
 def _problem(error: ValidationError) -> str:

@@ -20,7 +20,6 @@ record's schema and bounds are the caller's to check, as for every record the se
 from __future__ import annotations
 
 from collections.abc import Sequence
-from datetime import datetime
 from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
@@ -29,7 +28,7 @@ from drboard_assembler.record import content_hash
 from .. import ranking
 from ..errors import InvalidSubmission, StoreBusy
 from ..identity import Caller
-from ..models.domain import AuditEvent, Board, Entry, NearRun, RunAuthor, Submission, with_flag
+from ..models.domain import AuditEvent, Board, Entry, NearRun, Submission, with_flag
 from ..models.requests import ImportedSubmission
 from ..models.views import BoardView
 from ..stores.base import ImportBatch, ImportedRow, IndexedRun, RecordArchive
@@ -45,6 +44,8 @@ if TYPE_CHECKING:
 Run = tuple[str, str, tuple[int, ...] | None]
 #: A submission, by where it is: (board id, racer key, submission id).
 Where = tuple[str, str, str]
+#: An indexed run: (fingerprint, racer key, board id, submission id, sorted complete laps).
+NearTuple = tuple[str, str, str, str, tuple[int, ...]]
 
 
 class PreparedSubmission(NamedTuple):
@@ -62,6 +63,32 @@ class ImportTally(NamedTuple):
     duplicates: int
 
 
+def prepare_submission(board: Board, item: ImportedSubmission) -> PreparedSubmission:
+    """Check an exported submission for ``board`` (BoardMismatch, SubmissionTooLarge,
+    InvalidSubmission when its id is not its content's hash) and prepare what importing it
+    writes: reads and writes nothing."""
+    record = item.record
+    check_belongs(record, board)
+    stored = check_record_size(record)
+    if content_hash(record) != record.submission_id:
+        raise InvalidSubmission("the record's submission_id does not match its content",
+                                detail=[{"loc": "record.submission_id", "type": "value_error",
+                                         "msg": "does not match the record's content"}])
+    submission, entry = scored_write(record, board, item.submitted_at)
+    prints = run_prints(record)
+    return PreparedSubmission(
+        row=ImportedRow(submission_id=record.submission_id, racer_key=submission.racer_key,
+                        submitted_at=ranking.timestamp(item.submitted_at),
+                        score_key=entry.score_key, rank_key=entry.rank_key,
+                        submission=submission.model_dump_json(), entry=entry.model_dump_json(),
+                        record=stored),
+        racer=record.racer,
+        runs=tuple((p.fingerprint, p.lane, tuple(p.laps_ms) if p.laps_ms else None)
+                   for p in prints),
+        fingerprints=tuple(sorted({p.fingerprint for p in prints})),
+        skeleton=confusable_skeleton(record.racer))
+
+
 class BulkImport:
     """One import of an export into one board: ``prepare`` every submission (nothing is
     written), then ``open`` the board and ``load`` the prepared submissions batch by batch."""
@@ -76,32 +103,14 @@ class BulkImport:
         #: with its own settings; else the exported board, which ``open`` creates.
         self.board = board
         self.caller = caller
+        self._lanes: dict[str, _Lane] = {}
 
     def prepare(self, item: ImportedSubmission) -> PreparedSubmission:
-        """Check an exported submission for the board (BoardMismatch, SubmissionTooLarge,
-        InvalidSubmission when its id is not its content's hash) and prepare what importing it
-        writes. Nothing is written, but the record is archived (where the board archives)."""
-        record = item.record
-        check_belongs(record, self.board)
-        stored = check_record_size(record)
-        if content_hash(record) != record.submission_id:
-            raise InvalidSubmission("the record's submission_id does not match its content",
-                                    detail=[{"loc": "record.submission_id", "type": "value_error",
-                                             "msg": "does not match the record's content"}])
-        keep_in_archive(self.archive, self.board.board_id, record)
-        submission, entry = scored_write(record, self.board, item.submitted_at)
-        prints = run_prints(record)
-        return PreparedSubmission(
-            row=ImportedRow(submission_id=record.submission_id, racer_key=submission.racer_key,
-                            submitted_at=ranking.timestamp(item.submitted_at),
-                            score_key=entry.score_key, rank_key=entry.rank_key,
-                            submission=submission.model_dump_json(), entry=entry.model_dump_json(),
-                            record=stored),
-            racer=record.racer,
-            runs=tuple((p.fingerprint, p.lane, tuple(p.laps_ms) if p.laps_ms else None)
-                       for p in prints),
-            fingerprints=tuple(sorted({p.fingerprint for p in prints})),
-            skeleton=confusable_skeleton(record.racer))
+        """Check an exported submission for the board and prepare what importing it writes
+        (``prepare_submission``); the record is archived too, where the board archives."""
+        prepared = prepare_submission(self.board, item)
+        keep_in_archive(self.archive, self.board.board_id, item.record)
+        return prepared
 
     def open(self) -> tuple[BoardView, bool]:
         """Create the board unless it exists (as ``import_board``); whether it was created."""
@@ -117,11 +126,45 @@ class BulkImport:
         replay.flag_the_others()
         return ImportTally(created=written.created, duplicates=len(batch) - written.created)
 
+    def lane(self, lane: str) -> _Lane:
+        """The runs of a lane this import compares with: those indexed when it first met the
+        lane, then its own as it writes them."""
+        if lane not in self._lanes:
+            self._lanes[lane] = _Lane(self.store.lane_runs(lane))
+        return self._lanes[lane]
+
     def _check_rules(self) -> None:
         stored = self.keeper.require(self.board.board_id).board
         if stored.rules != self.board.rules:
             raise StoreBusy(f"the rules of {self.board.board_id!r} changed while the export was "
                             "checked; import it again")
+
+
+class _Lane:
+    """The indexed runs of a lane, by best lap, each once per fingerprint, racer and board, as
+    (fingerprint, racer key, board id, submission id, sorted complete laps)."""
+
+    def __init__(self, runs: Sequence[NearRun]) -> None:
+        self.by_best: dict[int, list[NearTuple]] = {}
+        self.keys: set[tuple[int, str, str, str]] = set()
+        for run in runs:
+            self.add((run.fingerprint, run.racer_key, run.board_id, run.submission_id,
+                      tuple(run.laps_ms)))
+
+    def add(self, run: NearTuple) -> None:
+        key = (run[4][0], run[0], run[1], run[2])
+        if key not in self.keys:
+            self.keys.add(key)
+            self.by_best.setdefault(run[4][0], []).append(run)
+
+    def copied(self, fingerprint: str, racer_key: str, laps: tuple[int, ...]) -> NearTuple | None:
+        """Another racer's run whose laps are each within NEAR_MS of these, the first in the
+        order the store reads them (by best lap, fingerprint, racer and board), or None."""
+        found = [run for best in range(laps[0] - NEAR_MS, laps[0] + NEAR_MS + 1)
+                 for run in self.by_best.get(best, ())
+                 if run[1] != racer_key and run[0] != fingerprint and len(run[4]) == len(laps)
+                 and abs(run[4][-1] - laps[-1]) <= NEAR_MS and same_laps(list(laps), list(run[4]))]
+        return min(found, key=lambda run: (run[4][0], run[0], run[1], run[2])) if found else None
 
 
 class _Replay:
@@ -133,13 +176,14 @@ class _Replay:
         store = load.store
         self.present = store.present_submissions(
             board_id, [(p.row.racer_key, p.row.submission_id) for p in batch])
-        self.authors = {fingerprint: {a.racer_key: a for a in authors}
+        #: Each fingerprint's authors: racer key -> (first time, board id, submission id).
+        self.authors = {fingerprint: {a.racer_key: (ranking.timestamp(a.first_at), a.board_id,
+                                                    a.submission_id) for a in authors}
                         for fingerprint, authors in store.authors_of(
                             sorted({run[0] for p in batch for run in p.runs})).items()}
         self.fingerprint_holders, self.skeleton_holders = store.holders(
             board_id, sorted({f for p in batch for f in p.fingerprints}),
             sorted({p.skeleton for p in batch}))
-        self.near: dict[str, list[tuple[int, NearRun]]] = {}  # this batch's runs, by lane
         self.flags: dict[Where, list[str]] = {}  # flags added, in order, by where
         self.written: dict[str, PreparedSubmission] = {}
         self.claims: list[tuple[str, str]] = []
@@ -155,10 +199,9 @@ class _Replay:
 
     def _import(self, prepared: PreparedSubmission) -> None:
         row = prepared.row
-        at = ranking.parse_timestamp(row.submitted_at)
         self._event("import", prepared.racer, row.submission_id)
         for fingerprint, lane, laps in prepared.runs:
-            self._index(row, fingerprint, lane, laps, at)
+            self._index(row, fingerprint, lane, laps)
         for fingerprint in prepared.fingerprints:
             if fingerprint not in self.fingerprint_holders:
                 self.fingerprint_holders[fingerprint] = row.racer_key
@@ -173,57 +216,39 @@ class _Replay:
         for fingerprint, lane, laps in prepared.runs:
             self._copies_of(prepared, fingerprint, lane, laps)
 
-    def _index(self, row: ImportedRow, fingerprint: str, lane: str, laps: tuple[int, ...] | None,
-               at: datetime) -> None:
+    def _index(self, row: ImportedRow, fingerprint: str, lane: str,
+               laps: tuple[int, ...] | None) -> None:
         """The run indexed as the store indexes it: its racer's earliest time with it kept,
         and its laps for near-copies (once per racer and board)."""
         self.runs.append(IndexedRun(fingerprint, lane, laps, row.racer_key, row.submitted_at,
                                     row.submission_id))
         authors = self.authors.setdefault(fingerprint, {})
         mine = authors.get(row.racer_key)
-        if mine is None or at < mine.first_at:
-            authors[row.racer_key] = RunAuthor(fingerprint=fingerprint, racer_key=row.racer_key,
-                                               first_at=at, board_id=self.board_id,
-                                               submission_id=row.submission_id)
+        # Timestamps of one fixed width, in UTC: as text, they sort in time order.
+        if mine is None or row.submitted_at < mine[0]:
+            authors[row.racer_key] = (row.submitted_at, self.board_id, row.submission_id)
         if laps:
-            lane_runs = self.near.setdefault(lane, [])
-            if not any(best == laps[0] and near.fingerprint == fingerprint
-                       and near.racer_key == row.racer_key for best, near in lane_runs):
-                lane_runs.append((laps[0], NearRun(
-                    fingerprint=fingerprint, racer_key=row.racer_key, board_id=self.board_id,
-                    submission_id=row.submission_id, laps_ms=list(laps))))
+            self.load.lane(lane).add((fingerprint, row.racer_key, self.board_id,
+                                      row.submission_id, laps))
 
     def _copies_of(self, prepared: PreparedSubmission, fingerprint: str, lane: str,
                    laps: tuple[int, ...] | None) -> None:
         """As ``Transfer._copies_of``: the copies of the run (every author but its first, all of
         them when the first are tied), and a near-copy of another racer's run."""
         row = prepared.row
-        authors = sorted(self.authors[fingerprint].values(), key=lambda author: author.first_at)
+        authors = self.authors[fingerprint]
         if len(authors) > 1:
-            first = authors[0]
-            tied = [a for a in authors if a.first_at == first.first_at]
-            for author in authors[1:] if len(tied) == 1 else authors:
-                self._flag((author.board_id, author.racer_key, author.submission_id), None, COPIED,
-                           f"the same laps as {first.racer_key!r}'s on {first.board_id!r}, "
-                           "pushed first")
+            ordered = sorted(authors.items(), key=lambda author: author[1][0])
+            first_racer, (first_at, first_board, _) = ordered[0]
+            tied = [racer for racer, (at, _, _) in ordered if at == first_at]
+            for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
+                self._flag((board_id, racer, submission_id), None, COPIED,
+                           f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
         if laps:
-            for near in self._near(lane, laps[0]):
-                if (near.racer_key != row.racer_key and near.fingerprint != fingerprint
-                        and same_laps(list(laps), near.laps_ms)):
-                    self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
-                               NEAR_COPY, f"laps within {NEAR_MS} ms of {near.racer_key!r}'s on "
-                                          f"{near.board_id!r}")
-                    return
-
-    def _near(self, lane: str, best_ms: int) -> list[NearRun]:
-        """The indexed runs of the lane near ``best_ms`` (those stored, and this batch's), in
-        the order the store gives them: by best lap, fingerprint, racer and board."""
-        stored = [(near.laps_ms[0], near) for near in
-                  self.load.store.near_runs(lane, best_ms, NEAR_MS)]
-        batch = [(best, near) for best, near in self.near.get(lane, ())
-                 if abs(best - best_ms) <= NEAR_MS]
-        return [near for _, near in sorted(stored + batch, key=lambda pair: (
-            pair[0], pair[1].fingerprint, pair[1].racer_key, pair[1].board_id))]
+            near = self.load.lane(lane).copied(fingerprint, row.racer_key, laps)
+            if near is not None:
+                self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+                           NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
 
     def _flag(self, where: Where, racer: str | None, flag: str, why: str) -> None:
         """Flag a run once: this batch's when it writes it, another's after the batch."""

@@ -390,6 +390,10 @@ class BoardStore(NoticeStore, Protocol):
     def present_submissions(self, board_id: str, keys: Sequence[tuple[str, str]]) -> set[str]:
         """Which of these (racer key, submission id) are on the board: their submission ids."""
 
+    def lane_runs(self, lane: str) -> list[NearRun]:
+        """Every indexed run of the lane, on every board, by best lap, then fingerprint, racer
+        and board (what ``near_runs`` reads a range of)."""
+
     def authors_of(self, fingerprints: Sequence[str]) -> dict[str, list[RunAuthor]]:
         """``run_authors`` of each fingerprint (earliest first), those with none left out."""
 

@@ -485,13 +485,13 @@ class SqliteStore:
     @staticmethod
     def _move_counts(db: sqlite3.Connection, board_id: str,
                      moves: dict[str, dict[str, int]]) -> None:
-        for node, children in moves.items():
-            for child, change in children.items():
-                db.execute(
-                    "INSERT INTO rank_counts VALUES (?, ?, ?, ?) ON CONFLICT (board_id, node, child) "
-                    "DO UPDATE SET entries = entries + excluded.entries", (board_id, node, child, change))
-            db.execute("DELETE FROM rank_counts WHERE board_id = ? AND node = ? AND entries = 0",
-                       (board_id, node))
+        db.executemany(
+            "INSERT INTO rank_counts VALUES (?, ?, ?, ?) ON CONFLICT (board_id, node, child) "
+            "DO UPDATE SET entries = entries + excluded.entries",
+            [(board_id, node, child, change) for node, children in moves.items()
+             for child, change in children.items()])
+        db.executemany("DELETE FROM rank_counts WHERE board_id = ? AND node = ? AND entries = 0",
+                       [(board_id, node) for node in moves])
 
     def history(self, racer_key: str, board_id: str | None = None) -> list[Submission]:
         if board_id is None:
@@ -627,6 +627,14 @@ class SqliteStore:
             "SELECT fingerprint, racer_key, board_id, submission_id, laps FROM near_runs "
             "WHERE lane = ? AND best_ms BETWEEN ? AND ? LIMIT 1000",
             (lane, best_ms - tolerance_ms, best_ms + tolerance_ms)).fetchall()
+        return [NearRun(fingerprint=row[0], racer_key=row[1], board_id=row[2],
+                        submission_id=row[3], laps_ms=[int(t) for t in row[4].split(",")])
+                for row in rows]
+
+    def lane_runs(self, lane: str) -> list[NearRun]:
+        rows = self._db.execute(
+            "SELECT fingerprint, racer_key, board_id, submission_id, laps FROM near_runs "
+            "WHERE lane = ? ORDER BY best_ms, fingerprint, racer_key, board_id", (lane,))
         return [NearRun(fingerprint=row[0], racer_key=row[1], board_id=row[2],
                         submission_id=row[3], laps_ms=[int(t) for t in row[4].split(",")])
                 for row in rows]

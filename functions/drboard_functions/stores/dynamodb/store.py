@@ -223,6 +223,13 @@ class DynamoDbStore:
                 ":high": text(near_sk(best_ms + tolerance_ms) + "~")}}, limit=1000)
         return [near_run_of(item) for item in items]
 
+    def lane_runs(self, lane: str) -> list[NearRun]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :lane",
+            "ExpressionAttributeValues": {":lane": text(lane_partition(lane))}})
+        return [near_run_of(item) for item in items]
+
     def fingerprint_holder(self, board_id: str, fingerprint: str) -> str | None:
         item = self.get_item(board_id, fingerprint_sk(fingerprint))
         return item["racer_key"]["S"] if item else None
