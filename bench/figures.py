@@ -1,4 +1,5 @@
-"""The figures table every benchmark prints: value, target, PASS/FAIL, and notes."""
+"""The figures table every benchmark prints: value, its floor and ratio (when it has one),
+target, PASS/FAIL, and notes."""
 
 from __future__ import annotations
 
@@ -21,19 +22,32 @@ class Figure:
     target: str = ""
     ok: bool | None = None  # None: informational, no target
     note: str = ""
+    #: The same figure for the fastest honest program giving the same output, in the same unit.
+    floor: float | None = None
+    floor_name: str = ""
 
-    def shown(self) -> str:
-        if self.value is None:
+    @property
+    def ratio(self) -> float | None:
+        if self.value is None or not self.floor:
+            return None
+        return self.value / self.floor
+
+    def shown(self, value: float | None = None, unit: str | None = None) -> str:
+        value = self.value if value is None and unit is None else value
+        unit = self.unit if unit is None else unit
+        if value is None:
             return "n/a"
-        if self.unit == "ms":
-            return f"{self.value:,.2f} ms" if self.value < 100 else f"{self.value:,.0f} ms"
-        if self.unit == "s":
-            return f"{self.value:,.2f} s"
-        if self.unit == "x":
-            return f"{self.value:,.2f} x"
-        if self.unit == "MiB":
-            return f"{self.value:,.1f} MiB"
-        return f"{self.value:,.0f} {self.unit}".strip()
+        if unit == "ms":
+            return f"{value:,.2f} ms" if value < 100 else f"{value:,.0f} ms"
+        if unit == "s":
+            return f"{value:,.2f} s"
+        if unit == "x":
+            return f"{value:,.2f} x"
+        if unit == "MiB":
+            return f"{value:,.1f} MiB"
+        if unit == "us":
+            return f"{value:,.1f} us"
+        return f"{value:,.0f} {unit}".strip()
 
 
 @dataclass
@@ -42,28 +56,53 @@ class Report:
     config: dict[str, Any] = field(default_factory=dict)
 
     def add(self, name: str, value: float | None, unit: str, *, limit: float | None = None,
-            ok: bool | None = None, target: str = "", note: str = "") -> Figure:
-        """A figure; with ``limit`` (or an ``ok`` verdict) it is checked against a target."""
+            ok: bool | None = None, target: str = "", note: str = "", floor: float | None = None,
+            floor_name: str = "", ratio_limit: float | None = None) -> Figure:
+        """A figure; with ``limit`` (or an ``ok`` verdict) it is checked against a target. With
+        a ``floor`` (what ``floor_name`` takes for the same output), its ratio to the floor is
+        shown beside it, and checked against ``ratio_limit`` when given."""
         if limit is not None:
             ok = value is not None and value <= limit
             target = target or f"<= {Figure('', limit, unit).shown()}"
-        figure = Figure(name, value, unit, target, ok, note)
+        figure = Figure(name, value, unit, target, ok, note, floor, floor_name)
+        if ratio_limit is not None:
+            figure.ok = figure.ratio is not None and figure.ratio <= ratio_limit and ok is not False
+            figure.target = f"{target + ', ' if target else ''}<= {ratio_limit:g} x the floor"
         self.figures.append(figure)
-        print(f"  {name}: {figure.shown()}" + (f"  [{_verdict(ok)}]" if ok is not None else ""),
+        floored = (f" (floor {figure.shown(floor, unit)}, {figure.shown(figure.ratio, 'x')})"
+                   if floor is not None else "")
+        print(f"  {name}: {figure.shown()}{floored}"
+              + (f"  [{_verdict(figure.ok)}]" if figure.ok is not None else ""),
               file=sys.stderr, flush=True)
         return figure
 
     def table(self) -> str:
-        rows = [("Figure", "Value", "Target", "Result")]
+        floors = any(f.floor is not None for f in self.figures)
+        # Each floor's program is described once, under a letter its figures' floors carry.
+        keys: dict[str, str] = {}
         for f in self.figures:
-            rows.append((f.name, f.shown(), f.target or "-", _verdict(f.ok)))
-        widths = [max(len(row[i]) for row in rows) for i in range(4)]
+            if f.floor is not None and f.floor_name and f.floor_name not in keys:
+                keys[f.floor_name] = _letters(len(keys))
+        rows = [("Figure", "Value", "Floor", "Ratio", "Target", "Result") if floors
+                else ("Figure", "Value", "Target", "Result")]
+        for f in self.figures:
+            key = f" ({keys[f.floor_name]})" if f.floor_name in keys else ""
+            floor = ((f.shown(f.floor, f.unit) + key, f.shown(f.ratio, "x")) if f.floor is not None
+                     else ("-", "-"))
+            rows.append((f.name, f.shown(), *(floor if floors else ()), f.target or "-", _verdict(f.ok)))
+        columns = len(rows[0])
+        widths = [max(len(row[i]) for row in rows) for i in range(columns)]
+        right = {1, 2, 3} if floors else {1}
         lines = []
-        for index, (name, value, target, result) in enumerate(rows):
-            lines.append(f"{name:<{widths[0]}}  {value:>{widths[1]}}  {target:<{widths[2]}}  "
-                         f"{result}")
+        for index, row in enumerate(rows):
+            cells = [f"{cell:>{widths[i]}}" if i in right else f"{cell:<{widths[i]}}"
+                     for i, cell in enumerate(row)]
+            lines.append("  ".join(cells).rstrip())
             if index == 0:
                 lines.append("  ".join("-" * w for w in widths))
+        if keys:
+            lines += ["", "Floors (the fastest honest program for the same output):",
+                      *(f"  ({key}) {name}" for name, key in keys.items())]
         notes = [f"  {f.name}: {f.note}" for f in self.figures if f.note]
         if notes:
             lines += ["", "Notes:", *notes]
@@ -85,6 +124,11 @@ class Report:
             json_path.write_text(json.dumps(
                 {"config": self.config, "figures": [asdict(f) for f in self.figures]}, indent=2) + "\n")
             print(f"Figures saved to {json_path}")
+
+
+def _letters(index: int) -> str:
+    """a, b, ..., z, aa, ab, ...: the key of the index-th floor."""
+    return (_letters(index // 26 - 1) if index >= 26 else "") + chr(ord("a") + index % 26)
 
 
 def _verdict(ok: bool | None) -> str:
