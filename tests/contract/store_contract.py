@@ -20,6 +20,7 @@ from datetime import UTC, datetime, timedelta
 
 import pytest
 from drboard_assembler.record import Record
+from drboard_functions import ranking
 from drboard_functions.models.domain import (
     AliasClaim,
     AuditEvent,
@@ -33,11 +34,16 @@ from drboard_functions.models.domain import (
     WriteOutcome,
 )
 from drboard_functions.service import evaluation_fingerprints, scored_write
+from drboard_functions.service.copies import run_prints
 from drboard_functions.stores.base import (
     AliasConflict,
     BoardHasEntries,
     BoardStore,
     FingerprintTaken,
+    ImportBatch,
+    ImportedRow,
+    ImportWritten,
+    IndexedRun,
     LimitReached,
 )
 
@@ -72,6 +78,15 @@ def submit(store: BoardStore, record: Record, when: datetime, board: Board | Non
     submission, entry = write_for(record, board, when)
     return store.record_submission(submission, record, entry, limits,
                                    fingerprints=evaluation_fingerprints(record))
+
+
+def imported_row(record: Record, board: Board, when: datetime) -> ImportedRow:
+    """The row a bulk import writes for ``record`` (as ``loading.prepare_submission`` makes it)."""
+    submission, entry = write_for(record, board, when)
+    return ImportedRow(submission_id=record.submission_id, racer_key=submission.racer_key,
+                       submitted_at=ranking.timestamp(when), score_key=entry.score_key,
+                       rank_key=entry.rank_key, submission=submission.model_dump_json(),
+                       entry=entry.model_dump_json(), record=record.model_dump_json())
 
 
 def claim(alias: str, principal: str) -> AliasClaim:
@@ -704,3 +719,55 @@ class StoreContract:
         assert holder is not None and holder.principal == "cognito:1"
         mine = store.alias_of("cognito:1")
         assert mine is not None and mine.alias == "Ada"
+
+    # ---- bulk import ------------------------------------------------------------------------
+
+    def test_an_import_batch_writes_as_its_submissions_one_by_one_would(self, store: BoardStore) -> None:
+        board = make_board()
+        submit(store, make_record("Cy", lap(9000)), at(0))
+        records = [make_record("Ada", lap(12000)), make_record("Bob", lap(11000)),
+                   make_record("Ada", lap(10000), model="m2"), make_record("Ada", lap(13000), model="m3"),
+                   make_record("Cy", lap(9500), model="m2")]
+        rows = [imported_row(record, board, at(10 + n)) for n, record in enumerate(records)]
+        runs = [IndexedRun(p.fingerprint, p.lane, tuple(p.laps_ms) if p.laps_ms else None,
+                           row.racer_key, row.submitted_at, row.submission_id)
+                for record, row in zip(records, rows, strict=True) for p in run_prints(record)]
+        batch = ImportBatch(rows=[*rows, rows[1]], fingerprints=[("f-ada", "ada"), ("f-bob", "bob")],
+                            skeletons=[("ada", "ada")], runs=runs, audit=[event(10, "import")])
+        written = store.import_batch(TRACK, batch)
+        assert written == ImportWritten(created=5, improved=2)  # Ada's first entry, then her best
+        assert [(e.racer, e.score.best_lap_ms) for e in store.top(TRACK, 10)] == [
+            ("Cy", 9000), ("Ada", 10000), ("Bob", 11000)]
+        assert ranks_by_count(store) == ranks_by_listing(store) and participants(store) == 3
+        assert len(store.history("ada", TRACK)) == 3 and store.tally(TRACK, "ada").submissions == 3
+        assert store.present_submissions(TRACK, [("ada", r.submission_id) for r in records[:1]]
+                                         + [("bob", "0" * 64)]) == {records[0].submission_id}
+        assert store.holders(TRACK, ["f-ada", "f-bob", "f-none"], ["ada", "bob"]) == (
+            {"f-ada": "ada", "f-bob": "bob"}, {"ada": "ada"})
+        fingerprint = runs[0].fingerprint
+        assert [a.racer_key for a in store.authors_of([fingerprint, "unknown"])[fingerprint]] == ["ada"]
+        assert [e.action for e in store.audit(TRACK, None, 10).events] == ["import"]
+        again = store.import_batch(TRACK, batch)
+        assert again == ImportWritten(created=0, improved=0)
+        assert participants(store) == 3
+
+    def test_an_import_batch_indexes_runs_for_near_copies(self, store: BoardStore) -> None:
+        board = make_board()
+        store.create_board(board)
+        record = make_record("Ada", [(9000, 100), (9100, 100), (9200, 100)])
+        row = imported_row(record, board, at(1))
+        [run] = run_prints(record)
+        assert run.laps_ms is not None
+        store.import_batch(TRACK, ImportBatch(rows=[row], fingerprints=[], skeletons=[], audit=[],
+                                              runs=[IndexedRun(run.fingerprint, run.lane,
+                                                               tuple(run.laps_ms), "ada",
+                                                               row.submitted_at, row.submission_id)]))
+        near = store.near_runs(run.lane, 9003, 5)
+        assert [(n.racer_key, n.laps_ms) for n in near] == [("ada", [9000, 9100, 9200])]
+        assert store.lane_runs(run.lane) == near and store.lane_runs("elsewhere") == []
+
+    def test_an_import_batch_needs_its_board(self, store: BoardStore) -> None:
+        row = imported_row(make_record("Ada"), make_board(), at(1))
+        with pytest.raises(KeyError):
+            store.import_batch(TRACK, ImportBatch(rows=[row], fingerprints=[], skeletons=[],
+                                                  runs=[], audit=[]))

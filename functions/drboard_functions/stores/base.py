@@ -411,7 +411,8 @@ class BoardStore(NoticeStore, Protocol):
         has none or it has a strictly lower rank key (counts, participants and the board's
         version moved to match); then each of ``fingerprints`` and ``skeletons`` claimed for
         its racer where no racer holds it, ``runs`` indexed as ``index_submission`` indexes
-        them, and ``audit`` appended. KeyError when there is no such board."""
+        them, and ``audit`` appended (an event already there is left as it is: the same batch
+        written twice changes nothing). KeyError when there is no such board."""
 
     # ---- event-wide bans --------------------------------------------------------------------
 

@@ -737,7 +737,7 @@ class SqliteStore:
             db.executemany(INDEX_NEAR, [(run.lane, run.laps_ms[0], run.fingerprint, run.racer_key,
                                          board_id, run.submission_id, ",".join(map(str, run.laps_ms)))
                                         for run in batch.runs if run.laps_ms])
-            db.executemany("INSERT INTO audit VALUES (?, ?, ?)",
+            db.executemany("INSERT OR IGNORE INTO audit VALUES (?, ?, ?)",
                            [(e.board_id, e.event_id, e.model_dump_json()) for e in batch.audit])
             return ImportWritten(created=len(rows), improved=improved)
 
