@@ -24,6 +24,7 @@ import statistics
 import sys
 import threading
 import time
+from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from datetime import UTC, datetime, timedelta
@@ -33,8 +34,13 @@ from typing import Any, NamedTuple
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the tests package: DynamoDB Local and the table from the template
 
+from click.testing import CliRunner  # noqa: E402
+from drboard_cli.commands.organisers import LOCAL_REBUILD_STEP_S  # noqa: E402
+from drboard_cli.main import cli  # noqa: E402
 from drboard_functions import ranking  # noqa: E402
 from drboard_functions.models.domain import Board, Design, Entry, Score  # noqa: E402
+from drboard_functions.models.requests import ImportedSubmission  # noqa: E402
+from drboard_functions.models.views import RankCounters  # noqa: E402
 from drboard_functions.service import LeaderboardService, racer_key  # noqa: E402
 from drboard_functions.stores.base import RankBuild  # noqa: E402
 from drboard_functions.stores.dynamodb import (  # noqa: E402
@@ -43,7 +49,7 @@ from drboard_functions.stores.dynamodb import (  # noqa: E402
     board_item,
     entry_item,
 )
-from drboard_functions.stores.dynamodb.ranks import RankCounters  # noqa: E402
+from drboard_functions.stores.dynamodb.ranks import RankCounters as StoreCounters  # noqa: E402
 
 from tests.integration.dynamodb_local import DynamoDbLocal  # noqa: E402
 from tests.recordkit import make_record  # noqa: E402
@@ -54,6 +60,7 @@ from figures import Report, p50_p95, timed_ms  # noqa: E402
 
 TRACK = "reInvent2019_track"
 TABLE = "drboard-bench"
+IMPORT_BATCH = 2000  # as `drboard import` loads them
 PAGE = 100
 
 # ---- targets --------------------------------------------------------------------------------
@@ -122,6 +129,7 @@ class Probe:
     """One size's board, read through the store and the service on a client that counts items."""
 
     def __init__(self, server: DynamoDbLocal, size: int) -> None:
+        self.server = server
         self.size, self.label, self.board_id = size, f"{size:,} racers", f"bench_{size}"
         self.last_racer = f"Last Racer {size}"  # pushed below every seeded racer
         self.last_key = ""  # their score key, once pushed
@@ -196,6 +204,9 @@ def run(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None
     if args.only_contention:
         bench_contention(report, server, args)
         return
+    if args.only_import:
+        bench_import(report, server, args)
+        return
     probes = []
     for size in args.sizes:
         print(f"seeding {size:,} racers ...", file=sys.stderr, flush=True)
@@ -207,6 +218,7 @@ def run(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None
     bench_contention(report, server, args)
     if args.only_ranks:
         return
+    bench_import(report, server, args)
 
     for probe in probes:
         probe.scanned.clear()
@@ -241,6 +253,51 @@ def run(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None
 
 
 
+def rebuild_ranks(report: Report, probe: Probe) -> None:
+    """`drboard board rebuild-ranks BOARD` on a board from before the rank counters: the command
+    itself (its loop of steps, each building for a few seconds, with progress), run in this
+    process on the board's DynamoDB store, against its floor: one read of every entry's score
+    key (what counting them takes at least), nothing written."""
+    client = probe.server.client()
+    calls = {"TransactWriteItems": 0, "UpdateItem": 0}
+
+    def count(event_name: str, **_: Any) -> None:
+        calls[event_name.rsplit(".", 1)[1]] += 1
+
+    for operation in calls:
+        client.meta.events.register(f"after-call.dynamodb.{operation}", count)
+    service = LeaderboardService(DynamoDbStore(TABLE, client))
+    steps: list[RankCounters] = []
+    rebuild = service.rebuild_ranks
+
+    def step(board_id: str, budget_s: float | None = None) -> RankCounters:
+        steps.append(rebuild(board_id, budget_s))
+        return steps[-1]
+
+    service.rebuild_ranks = step  # type: ignore[method-assign]
+    start = time.perf_counter()
+    result = CliRunner().invoke(cli, ["--db", "unused.db", "board", "rebuild-ranks", probe.board_id],
+                                obj=lambda _: service)
+    seconds = time.perf_counter() - start
+    if result.exit_code != 0:
+        raise SystemExit(f"drboard board rebuild-ranks failed:\n{result.output}")
+    assert steps[-1].done and steps[-1].counted == steps[-1].participants
+    floor_start = time.perf_counter()
+    counted = sum(page["Count"] for page in probe.store._pages({
+        "TableName": TABLE, "IndexName": RANK_INDEX, "ConsistentRead": True,
+        "KeyConditionExpression": "board = :b AND rank_key > :first",
+        "ExpressionAttributeValues": {":b": {"S": probe.board_id}, ":first": {"S": "0"}},
+        "ProjectionExpression": "score_key"}))
+    floor = time.perf_counter() - floor_start
+    report.add(f"`drboard board rebuild-ranks` (once per board from before them) @ {probe.label}",
+               seconds, "s", floor=floor,
+               floor_name="one Query through every entry's score key, nothing written",
+               note=f"{len(steps)} steps of up to {LOCAL_REBUILD_STEP_S:g} s, "
+                    f"{calls['TransactWriteItems']:,} batches (a transaction each, "
+                    f"{counted / max(calls['TransactWriteItems'], 1):,.0f} entries a batch), "
+                    f"{steps[-1].participants:,} racers counted")
+
+
 # A best lap of 19 s lands mid-board (laps are drawn from 8-30 s).
 MIDDLE = ranking.score_key(Score(qualified=True, time_ms=19_000, best_completion_pct=100.0,
                                  laps_completed=3, best_lap_ms=19_000, run="x"))
@@ -255,10 +312,7 @@ def bench_ranks(report: Report, probes: list[Probe], args: argparse.Namespace) -
         report.add(f"count_better mid-board, counted from the entries @ {probe.label}",
                    (time.perf_counter() - start) * 1000, "ms",
                    note=f"{queried:,} items read (a board before the counters; before them, every board)")
-        start = time.perf_counter()
-        assert probe.store.build_rank_counters(probe.board_id).done
-        report.add(f"build_rank_counters (once per board from before them) @ {probe.label}",
-                   time.perf_counter() - start, "s")
+        rebuild_ranks(report, probe)
         # Seeded racers have entries only; the last racer (0.5 % done) is pushed, record and all.
         probe.service.push(make_record(probe.last_racer, [(9_000, 0.5)]), probe.board_id)
         last = probe.store.get_entry(probe.board_id, racer_key(probe.last_racer))
@@ -309,7 +363,7 @@ def bench_ranks(report: Report, probes: list[Probe], args: argparse.Namespace) -
                    target=f"<= {RANK_SCALING_MAX:.2f} x" if checked else "")
 
 
-class NeverBuilt(RankCounters):
+class NeverBuilt(StoreCounters):
     def build(self, board_id: str, max_racers: int | None = None,
               budget_s: float | None = None) -> RankBuild:
         return RankBuild(done=False, counted=0, participants=0)
@@ -395,6 +449,76 @@ def contend(server: DynamoDbLocal, store_type: type[DynamoDbStore], args: argpar
                       counts["cancelled"], len(gave_up), exact)
 
 
+def bench_import(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None:
+    """An export's submissions imported into a new board in bulk (LeaderboardService.bulk_import,
+    as `drboard import` loads an embedded board: BatchWriteItem for records, audit events and
+    the near-copy index, one TransactWriteItems per 12 submissions for what must stay
+    consistent), and one by one as a deployed board's import route replays them (a push's
+    transaction each), against a floor: BatchWriteItem of the board's own items the bulk import
+    ends with, 25 a call, from one thread. Both boards are checked to rank alike."""
+    from bench_local import RecordFactory
+
+    factory = RecordFactory(random.Random(args.seed))
+    items = [ImportedSubmission.model_construct(submitted_at=T0 + timedelta(seconds=n),
+                                                record=factory.record(f"importer-{n:06d}"))
+             for n in range(args.import_racers)]
+    label = f"{len(items):,} racers"
+    runs: dict[str, tuple[float, Counter[str]]] = {}
+    for way in ("bulk", "replay"):
+        client = server.client()
+        calls: Counter[str] = Counter()
+        client.meta.events.register("after-call.dynamodb", lambda event_name, calls=calls, **_:
+                                    calls.update([event_name.rsplit(".", 1)[1]]))
+        service = LeaderboardService(DynamoDbStore(TABLE, client))
+        board = Board(board_id=f"imported_{way}", track=TRACK, title="Imported", created_at=T0)
+        print(f"importing {label} ({way}) ...", file=sys.stderr, flush=True)
+        start = time.perf_counter()
+        if way == "bulk":
+            bulk = service.bulk_import(board)
+            prepared = [bulk.prepare(item) for item in items]
+            bulk.open()
+            for first in range(0, len(prepared), IMPORT_BATCH):
+                bulk.load(prepared[first:first + IMPORT_BATCH])
+        else:
+            service.import_board(board)
+            for item in items:
+                service.import_submission(board.board_id, item)
+        runs[way] = (time.perf_counter() - start, calls)
+    check = DynamoDbStore(TABLE, server.client())
+    ranked = [[(e.racer, check.count_better(f"imported_{way}", e.score_key)) for e in
+               check.top(f"imported_{way}", 50)] for way in ("bulk", "replay")]
+    assert ranked[0] == ranked[1], "the two imports rank alike"
+    floor = _batch_write_floor(server, "imported_bulk")
+    floor_name = "BatchWriteItem of the board's own items the bulk import ends with, 25 a call"
+    for way, name in (("bulk", "in bulk"), ("replay", "one by one (the import route's replay)")):
+        seconds, calls = runs[way]
+        report.add(f"import {label} {name}", seconds, "s", floor=floor[0], floor_name=floor_name,
+                   note=f"{sum(calls.values()) / len(items):.1f} requests a racer ("
+                        + ", ".join(f"{n:,} {op}" for op, n in calls.most_common()) + ")"
+                        + (f"; the floor wrote {floor[1]:,} items" if way == "bulk" else ""))
+
+
+def _batch_write_floor(server: DynamoDbLocal, board_id: str) -> tuple[float, int]:
+    """The seconds BatchWriteItem takes to write a copy of the board's items (under another
+    board id), read beforehand; and how many."""
+    client = server.client()
+    items: list[dict[str, Any]] = []
+    request: dict[str, Any] = {"TableName": TABLE, "KeyConditionExpression": "board = :b",
+                               "ExpressionAttributeValues": {":b": {"S": board_id}}}
+    while True:
+        page = client.query(**request)
+        items += [item | {"board": {"S": f"{board_id}_floor"}} for item in page["Items"]]
+        if "LastEvaluatedKey" not in page:
+            break
+        request["ExclusiveStartKey"] = page["LastEvaluatedKey"]
+    start = time.perf_counter()
+    for first in range(0, len(items), 25):
+        pending: Any = {TABLE: [{"PutRequest": {"Item": item}} for item in items[first:first + 25]]}
+        while pending:
+            pending = client.batch_write_item(RequestItems=pending).get("UnprocessedItems") or None
+    return time.perf_counter() - start, len(items)
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="boards of 1,000 and 10,000 racers")
@@ -405,6 +529,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--pushes", type=int, default=30, help="timed mid-board pushes per size (30)")
     parser.add_argument("--pushers", type=int, default=16, help="threads pushing at once (16)")
     parser.add_argument("--pushes-each", type=int, default=10, help="pushes per thread (10)")
+    parser.add_argument("--import-racers", type=int,
+                        help="racers imported in bulk and one by one (2000; --quick: 300)")
+    parser.add_argument("--only-import", action="store_true", help="the import only")
     parser.add_argument("--only-ranks", action="store_true", help="ranks and contention only")
     parser.add_argument("--only-contention", action="store_true", help="pushes contending only")
     parser.add_argument("--threads", type=int, default=8, help="seeding threads (8)")
@@ -412,6 +539,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--json", type=Path, help="also save the figures here")
     args = parser.parse_args(argv)
     args.sizes = args.sizes or ([1_000, 10_000] if args.quick else [1_000, 100_000])
+    args.import_racers = args.import_racers or (300 if args.quick else 2_000)
     return args
 
 
