@@ -9,8 +9,12 @@ fingerprints and its alias's skeleton claimed on the board where free; and, as a
 organiser's replay, never a refusal for a copied run or a lookalike alias: what replaying would
 flag for the organiser is flagged (both runs of a copy, a near-copy, a lookalike). A batch reads
 what the boards hold of its submissions in a few reads (those already on the board, their runs'
-authors, the holders of their fingerprints and skeletons, the runs near theirs), replays its
-submissions in memory, in order, from there, and writes the outcome at once.
+authors, the holders of their fingerprints and skeletons), replays its submissions in memory, in
+order, from there, and writes the outcome at once. The runs a near-copy is looked for among are
+read once per lane (track, direction, race type), when the import first meets it, and kept with
+the import's own as it writes them: a run another racer pushes during the import is compared
+with the import's by that push (which flags its own run, where a replay would have flagged the
+imported one).
 
 What is checked of each submission here: that it belongs on the board, that its record is
 within the record's bound in bytes, and that its submission id is its content's hash (the
