@@ -89,6 +89,7 @@ class LeaderboardService:
     boards_page = _handed_to("_reading", Reading.boards_page)
     board_page = _handed_to("_reading", Reading.board_page)
     board_tag = _handed_to("_reading", Reading.board_tag)
+    board_version = _handed_to("_reading", Reading.board_version)
     racer = _handed_to("_reading", Reading.racer)
     compare = _handed_to("_reading", Reading.compare)
     insights = _handed_to("_reading", Reading.insights)

@@ -101,6 +101,10 @@ class Reading:
         stored = live(board_id, self.store.get_board(board_id))
         return page_tag(self.keeper.view(stored))
 
+    def board_version(self, board_id: str) -> int | None:
+        """The board's version in the store's cheapest read (None: no such board, yet)."""
+        return self.store.board_version(board_id)
+
     def racer(self, board_id: str, racer: str, limit: int | None = None,
               cursor: str | None = None) -> RacerView:
         """The racer's entry, rank and best record, and their history on the board: ``limit``

@@ -203,6 +203,10 @@ class BoardStore(NoticeStore, Protocol):
     def get_board(self, board_id: str) -> StoredBoard | None:
         """The board and its number of racers, or None."""
 
+    def board_version(self, board_id: str) -> int | None:
+        """The board's version alone (None: no such board), in the store's cheapest read: what a
+        kept copy of its standings is checked against (see ``routes.standings``)."""
+
     def create_board(self, board: Board) -> StoredBoard:
         """Create the board unless it exists; return what is stored."""
 

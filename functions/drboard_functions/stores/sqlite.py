@@ -260,6 +260,10 @@ class SqliteStore:
         ).fetchone()
         return _board(row) if row else None
 
+    def board_version(self, board_id: str) -> int | None:
+        row = self._db.execute("SELECT version FROM boards WHERE board_id = ?", (board_id,)).fetchone()
+        return int(row[0]) if row else None
+
     def create_board(self, board: Board) -> StoredBoard:
         with self._write() as db:
             db.execute("INSERT OR IGNORE INTO boards (board_id, board) VALUES (?, ?)",

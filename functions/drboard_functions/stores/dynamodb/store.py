@@ -131,6 +131,16 @@ class DynamoDbStore:
         item = self.get_item(board_id, BOARD_SK)
         return stored_board(item) if item else None
 
+    def board_version(self, board_id: str) -> int | None:
+        # A consistent read of two small attributes (one read unit: the board item is under
+        # 4 KB): a copy kept for the version it reads is never older than the last write.
+        item = self.client.get_item(TableName=self.table, ConsistentRead=True,
+                                    Key=key(board_id, BOARD_SK),
+                                    ProjectionExpression="sk, board_version").get("Item")
+        if not item:
+            return None
+        return int(item.get("board_version", {"N": "0"})["N"])
+
     def create_board(self, board: Board) -> StoredBoard:
         try:
             self.client.put_item(
