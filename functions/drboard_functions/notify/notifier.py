@@ -48,8 +48,14 @@ class Notifier:
 
     def entry_changed(self, change: EntryChange) -> list[str]:
         """Announce what the change says, if anything; the failures (empty: all sent)."""
+        if not self.listened(change.board_id):
+            return []  # no one listens: no announcement to build (four reads a push, saved)
         announcement = entry_announcement(self.store, change, self.board_url)
         return self.announce(announcement) if announcement else []
+
+    def listened(self, board_id: str) -> bool:
+        """Whether any webhook hears of the board (its own, or the event's)."""
+        return any(self.store.webhooks(target.key) for target in targets_of(board_id))
 
     def check_windows(self) -> list[str]:
         """Announce the boards' openings and closings not yet announced; the failures."""
@@ -114,9 +120,14 @@ class NoticeWorker:
         self.thread = threading.Thread(target=self._run, name="drboard-announcements", daemon=True)
 
     def start(self) -> NoticeWorker:
-        self.service.listen(self.changes.put)
+        self.service.listen(self._heard)
         self.thread.start()
         return self
+
+    def _heard(self, change: EntryChange) -> None:
+        # Asked in the push's own thread: a change no webhook hears of wakes no one.
+        if self.notifier.listened(change.board_id):
+            self.changes.put(change)
 
     def stop(self) -> None:
         """Stop taking changes; announce those already taken, then end the thread."""

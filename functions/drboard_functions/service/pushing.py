@@ -86,13 +86,15 @@ class Pushing:
                               "`drboard join CODE` for a `drboard serve` board")
         now = self.keeper.clock()
         claim = self._new_claim(caller, record.racer, now)
-        board_id = self.keeper.for_record(record, board_id, now).board.board_id
+        found = self.keeper.for_record(record, board_id, now)
+        board_id = found.board.board_id
         key = racer_key(record.racer)
         prints = run_prints(record)
         skeleton = confusable_skeleton(record.racer)
         archived = False
-        for _ in range(SETTINGS_ATTEMPTS):
-            stored_board = self.keeper.require(board_id)
+        for attempt in range(SETTINGS_ATTEMPTS):
+            # The board as just read for the first check; read again when it changed meanwhile.
+            stored_board = found if attempt == 0 else self.keeper.require(board_id)
             board = stored_board.board
             bans, bans_version = self.store.event_bans()
             check_not_banned(board, bans, record.racer, caller)
