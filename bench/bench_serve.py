@@ -41,6 +41,7 @@ from bench_local import BOARD_ID, RecordFactory, seed_board
 
 READY = re.compile(r"on (http://\S+)")
 STALLED_CONNECTIONS = 100
+WARM_UP_PUSHES = 20
 #: The standings reads: the board's JSON, its web page, and the JSON asked again with the ETag
 #: the client holds (answered 304).
 READS = {
@@ -60,12 +61,20 @@ TICKS = os.sysconf("SC_CLK_TCK")
 #:   connection) exactly the statements, with the same parameters, that drboard's store ran for
 #:   the same record, in the same transactions, and answers the receipt drboard gave it.
 #:   Everything drboard does besides the storage (validating the record, scoring it, the trust
-#:   rules, routing, encoding) is what the floor leaves out.
+#:   rules, routing, encoding) is what this floor leaves out.
+#: - The second push floor ("validate") also validates the body as a Record (the schema and the
+#:   checks every board makes: its figures, its submission id, its texts), as any server that
+#:   stores what racers send must; it leaves out the scoring, the trust rules and the routing.
 FLOOR_SERVER = r"""
 import json, pickle, socket, sqlite3, sys, uvicorn
 answers = pickle.load(open(sys.argv[1], "rb"))
 pushes = pickle.load(open(sys.argv[2], "rb")) if sys.argv[2] != "-" else {}
 db = sqlite3.connect(sys.argv[3], isolation_level=None, check_same_thread=False) if pushes else None
+if sys.argv[4] == "validate":
+    from drboard_assembler.record import Record
+    submission_of = lambda body: Record.model_validate_json(body).submission_id
+else:
+    submission_of = lambda body: json.loads(body)["submission_id"]
 if db is not None:
     db.execute("PRAGMA journal_mode=WAL")
     db.execute("PRAGMA synchronous=NORMAL")
@@ -80,7 +89,7 @@ async def app(scope, receive, send):
         body += message.get("body", b"")
         more = message.get("more_body", False)
     if scope["method"] == "POST":
-        statements, status, headers, answer = pushes[json.loads(body)["submission_id"]]
+        statements, status, headers, answer = pushes[submission_of(body)]
         for sql, parameters in statements:
             db.execute(sql, parameters).fetchall()
     else:
@@ -244,12 +253,13 @@ def start_drboard(db: Path, workdir: Path) -> Server:
     return Server("drboard", process, int(match.group(1).rsplit(":", 1)[1]))
 
 
-def start_floor(answers: Path, pushes: Path | None, db: Path | None) -> Server:
+def start_floor(answers: Path, pushes: Path | None, db: Path | None, *, validate: bool = False) -> Server:
     process = subprocess.Popen([sys.executable, "-c", FLOOR_SERVER, str(answers),
-                                str(pushes) if pushes else "-", str(db) if db else "-"],
+                                str(pushes) if pushes else "-", str(db) if db else "-",
+                                "validate" if validate else "parse"],
                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     assert process.stdout is not None
-    return Server("floor", process, int(process.stdout.readline()))
+    return Server("floor, validating" if validate else "floor", process, int(process.stdout.readline()))
 
 
 def fetch(port: int, payload: bytes) -> tuple[int, list[tuple[bytes, bytes]], bytes]:
@@ -407,14 +417,14 @@ def measure_reads(args: argparse.Namespace, servers: dict[str, Server], etags: d
 
 def measure_pushes(args: argparse.Namespace, servers: dict[str, Server], bodies: list[bytes]) -> list[Row]:
     rows = []
-    left = {"drboard": list(bodies), "floor": list(bodies)}
+    left = {name: list(bodies) for name in servers}
     for fresh in (False, True):
         for clients in args.clients:
             print(f"push, {'new connections' if fresh else 'keep-alive'}, {clients} clients ...",
                   file=sys.stderr, flush=True)
-            loads = {"drboard": Load(), "floor": Load()}
+            loads = {name: Load() for name in servers}
             for _ in range(args.rounds):
-                for server in servers.values():
+                for server in servers.values():  # interleaved: drboard, floor, validating floor
                     mine, left[server.name] = (left[server.name][:args.pushes],
                                                left[server.name][args.pushes:])
                     threads = min(clients, len(mine))
@@ -423,9 +433,17 @@ def measure_pushes(args: argparse.Namespace, servers: dict[str, Server], bodies:
                               start_at=time.monotonic() + 0.3, expect=201,
                               bodies=[requests[t::threads] for t in range(threads)])
                     window(server, job, min(threads, args.client_processes), loads[server.name])
-            rows.append(Row("push", "new" if fresh else "keep-alive", clients,
-                            loads["drboard"], loads["floor"]))
+            connections = "new" if fresh else "keep-alive"
+            rows.append(Row("push", connections, clients, loads["drboard"], loads["floor"]))
+            rows.append(Row("push (floor validates)", connections, clients, loads["drboard"],
+                            loads["floor, validating"]))
     return rows
+
+
+def warm_up(server: Server, requests: list[bytes]) -> None:
+    """Requests answered before any window: a process's first ones build what it keeps."""
+    run_job(Job(port=server.port, threads=1, fresh=False, start_at=0.0, expect=201,
+                bodies=[requests]))
 
 
 def stalled_connections(port: int, path: str) -> dict[str, float]:
@@ -483,7 +501,7 @@ def measure(args: argparse.Namespace, workdir: Path) -> tuple[list[Row], dict[st
     pushes: dict[str, Any] = {}
     bodies: list[bytes] = []
     if args.only != "get":
-        count = args.pushes * args.rounds * len(args.clients) * 2
+        count = args.pushes * args.rounds * len(args.clients) * 2 + WARM_UP_PUSHES
         print(f"building {count:,} records and the storage work of each push ...",
               file=sys.stderr, flush=True)
         records = [factory.record(f"push-{index:06d}") for index in range(count)]
@@ -509,7 +527,17 @@ def measure(args: argparse.Namespace, workdir: Path) -> tuple[list[Row], dict[st
             servers = {"drboard": drboard, "floor": floor}
             rows = measure_reads(args, servers, etags) if args.only != "push" else []
             if args.only != "get":
-                rows += measure_pushes(args, servers, bodies)
+                shutil.copyfile(seeded, workdir / "validating.db")
+                validating = start_floor(workdir / "answers.pickle", workdir / "pushes.pickle",
+                                         workdir / "validating.db", validate=True)
+                try:
+                    pushers = {"drboard": drboard, "floor": floor, validating.name: validating}
+                    warm = [request_bytes("POST", PUSH_PATH, body=body) for body in bodies[:WARM_UP_PUSHES]]
+                    for server in pushers.values():
+                        warm_up(server, warm)
+                    rows += measure_pushes(args, pushers, bodies[WARM_UP_PUSHES:])
+                finally:
+                    validating.stop()
         finally:
             floor.stop()
         print(f"{STALLED_CONNECTIONS} stalled connections ...", file=sys.stderr, flush=True)

@@ -98,6 +98,7 @@ def lap(ms: int) -> list[LapSpec]:
 def version(store: BoardStore, board_id: str = TRACK) -> int:
     stored = store.get_board(board_id)
     assert stored is not None
+    assert store.board_version(board_id) == stored.version  # the cheap read agrees
     return stored.version
 
 
@@ -617,6 +618,11 @@ class StoreContract:
         assert seen == sorted(set(seen)), seen  # strictly increasing
         assert [s.version for s in store.list_boards()] == [seen[-1]]
         assert store.front_page(TRACK, 1)[0] == store.get_board(TRACK)
+
+    def test_a_board_that_is_not_there_has_no_version(self, store: BoardStore) -> None:
+        assert store.board_version(TRACK) is None
+        store.create_board(make_board())
+        assert store.board_version(TRACK) == version(store)
 
     def test_what_leaves_the_standings_alone_leaves_the_version(self, store: BoardStore) -> None:
         submit(store, make_record("Ada", lap(8000)), at(0))
