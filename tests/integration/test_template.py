@@ -229,6 +229,46 @@ def test_the_api_is_throttled_logged_and_its_functions_reserved(
     assert 0 < int(parameters["ApiRateLimit"]["Default"]) <= int(parameters["ApiBurstLimit"]["Default"])
 
 
+def test_an_optional_cdn_keeps_only_what_the_board_says_and_passes_signed_calls_through(
+        sam: dict[str, Any], cloudformation: dict[str, Any]) -> None:
+    from drboard_functions.routes.responses import PUBLIC_CACHE
+
+    parameter = sam["Parameters"]["CdnDistribution"]
+    assert (parameter["Default"], sorted(parameter["AllowedValues"])) == ("false", ["false", "true"])
+    assert sam["Conditions"]["WithCdn"] == {"Fn::Equals": [{"Ref": "CdnDistribution"}, "true"]}
+    resources = cloudformation["Resources"]
+    cdn = {name: resources[name] for name in ("PublicReadsCachePolicy", "ApiRequestPolicy", "BoardCdn")}
+    assert all(resource["Condition"] == "WithCdn" for resource in cdn.values())
+    assert cloudformation["Outputs"]["CdnUrl"]["Condition"] == "WithCdn"
+
+    # Kept as long as the board's own Cache-Control says, and never past a few seconds; an
+    # answer that says nothing (signed, organiser, errors) is not kept at all.
+    policy = cdn["PublicReadsCachePolicy"]["Properties"]["CachePolicyConfig"]
+    max_age = int(re.search(r"max-age=(\d+)", PUBLIC_CACHE)[1])  # type: ignore[index]
+    assert policy["MinTTL"] == policy["DefaultTTL"] == 0 and max_age <= policy["MaxTTL"] <= 5
+    key = policy["ParametersInCacheKeyAndForwardedToOrigin"]
+    assert key["QueryStringsConfig"] == {"QueryStringBehavior": "all"}
+    assert set(key["HeadersConfig"]["Headers"]) == {"Authorization", "Origin"}  # forwarded, never shared
+    assert key["CookiesConfig"] == {"CookieBehavior": "none"}
+
+    config = cdn["BoardCdn"]["Properties"]["DistributionConfig"]
+    [origin] = config["Origins"]
+    assert origin["DomainName"] == {"Fn::Sub": "${BoardApi}.execute-api.${AWS::Region}.${AWS::URLSuffix}"}
+    assert origin["CustomOriginConfig"]["OriginProtocolPolicy"] == "https-only"
+    default = config["DefaultCacheBehavior"]
+    assert default["CachePolicyId"] == {"Ref": "PublicReadsCachePolicy"}
+    assert default["OriginRequestPolicyId"] == {"Ref": "ApiRequestPolicy"}
+    assert set(default["CachedMethods"]) == {"GET", "HEAD"} and "POST" in default["AllowedMethods"]
+    [signed_in] = config["CacheBehaviors"]
+    assert signed_in["PathPattern"] == COGNITO_PREFIX + "/*"
+    assert signed_in["CachePolicyId"] == "4135ea2d-6df8-44a3-9df3-4b5a84be39ad"  # CachingDisabled
+    assert {error["ErrorCachingMinTTL"] for error in config["CustomErrorResponses"]} == {0}
+    assert {404, 500, 503} <= {error["ErrorCode"] for error in config["CustomErrorResponses"]}
+    # The announcements link to the pages viewers read: the CDN's when there is one.
+    url = sam["Resources"]["NotifyFunction"]["Properties"]["Environment"]["Variables"]["BOARD_URL"]
+    assert url["Fn::If"][0] == "WithCdn" and "BoardCdn.DomainName" in url["Fn::If"][1]["Fn::Sub"]
+
+
 # ---- each handler with only its template environment and its template permissions ------------
 
 
