@@ -55,7 +55,8 @@ def list_boards(service: Service, limit: Limit = DEFAULT_LIMIT, cursor: Cursor =
                 "`next_cursor` as `cursor` for the next page. The answer's `ETag` changes with "
                 "the standings: send it back as `If-None-Match` and an unchanged board answers "
                 "`304 Not Modified` with no body, after a single read (a screen can poll every "
-                "few seconds).",
+                "few seconds). Like every public read, it carries `Cache-Control: public, "
+                "max-age=2, stale-while-revalidate=2`: a CDN or a browser may keep it two seconds.",
     tags=["boards"],
     responses={200: json_response("The board and one page of its entries.", BoardPage),
                304: {"description": "Unchanged since the `ETag` sent in `If-None-Match`."},
