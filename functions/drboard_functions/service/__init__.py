@@ -5,7 +5,8 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading) and ``transfer`` (export and import). :class:`LeaderboardService` only hands
+trail's reading), ``transfer`` (export and import) and ``seasons`` (boards added up into a
+season's standings, and its final). :class:`LeaderboardService` only hands
 each call to the room that answers it.
 """
 
@@ -30,6 +31,7 @@ from .moderating import Moderating
 from .paging import DEFAULT_PAGE
 from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+from .seasons import Seasons
 from .transfer import Transfer
 
 P = ParamSpec("P")
@@ -69,6 +71,7 @@ class LeaderboardService:
         self._managing = Managing(keeper)
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
+        self._seasons = Seasons(keeper)
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)
@@ -99,3 +102,16 @@ class LeaderboardService:
     export_page = _handed_to("_transfer", Transfer.export_page)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
+
+    create_season = _handed_to("_seasons", Seasons.create_season)
+    update_season = _handed_to("_seasons", Seasons.update_season)
+    add_round = _handed_to("_seasons", Seasons.add_round)
+    remove_round = _handed_to("_seasons", Seasons.remove_round)
+    set_final = _handed_to("_seasons", Seasons.set_final)
+    clear_final = _handed_to("_seasons", Seasons.clear_final)
+    close_season = _handed_to("_seasons", Seasons.close_season)
+    reopen_season = _handed_to("_seasons", Seasons.reopen_season)
+    seasons = _handed_to("_seasons", Seasons.seasons)
+    seasons_page = _handed_to("_seasons", Seasons.seasons_page)
+    season = _handed_to("_seasons", Seasons.season)
+    board_seasons = _handed_to("_seasons", Seasons.board_seasons)

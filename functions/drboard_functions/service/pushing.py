@@ -31,6 +31,7 @@ from ..models.views import Me, PushReceipt
 from ..stores.base import AliasConflict, FingerprintTaken, LimitReached, RecordArchive
 from ..views import design_of, entry_view, history_item
 from .boards import BoardKeeper, check_open, racer_key
+from .seasons import check_entrant
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
 
@@ -58,6 +59,7 @@ class Pushing:
         if stored is not None:
             return self._duplicate_receipt(stored, record.racer)
         check_open(board, now)
+        check_entrant(self.keeper, board.board_id, record.racer)
         submission, entry = scored_write(record, board, now)
         limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
                                   max_submissions=board.max_submissions)

@@ -18,7 +18,9 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
 - ``F#<fingerprint>``: an evaluation's content on the board, and the racer (``racer_key``) who
   pushed it first: a copy under another racer fails the push transaction;
 - ``A#<event_id>``: one audit event (``data``), written once and never changed;
-- ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``).
+- ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``);
+- ``#SEASON#<season_id>``: the board's link to a season (see ``seasons.py``, which also keeps
+  the seasons themselves in partitions of their own).
 
 Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
 holds an alias's claim and ``P#<principal>`` the same claim by its sign-in.

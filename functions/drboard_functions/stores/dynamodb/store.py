@@ -1,7 +1,7 @@
 """The cloud board: one DynamoDB table (its one definition is ``BoardTable`` in template.yaml).
 
 How each thing is kept as an item is in ``codecs.py``; a push's transaction in
-``transaction.py``; the rank counters in ``ranks.py``. Aliases are claimed in one transaction
+``transaction.py``; the rank counters in ``ranks.py``; seasons in ``seasons.py``. Aliases are claimed in one transaction
 that writes the alias's item and its sign-in's on condition that neither exists. Only this
 package talks to DynamoDB.
 """
@@ -69,6 +69,7 @@ from .codecs import (
 )
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
+from .seasons import DynamoDbSeasons
 from .transaction import PushTransaction, board_change
 
 if TYPE_CHECKING:
@@ -81,7 +82,7 @@ BATCH_GET_KEYS = 100
 
 
 @translating("the board's table")
-class DynamoDbStore:
+class DynamoDbStore(DynamoDbSeasons):
     """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
     same board, raise StoreBusy; a timeout or a lost connection StoreUnavailable (nothing
     written either way)."""
