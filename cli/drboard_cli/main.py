@@ -32,13 +32,13 @@ FAILURE = 1
 #: board id taken, a board that cannot change. Named, so that nothing is imported to start.
 BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardMismatch",
                               "InvalidQuery", "BoardExists", "BoardLocked", "UnreadableBody",
-                              "UnsupportedBody"})
+                              "UnsupportedBody", "SeasonExists", "SeasonLocked"})
 #: The domain errors that are failures (exit 1): nothing found, a closed board, a used-up
 #: submission limit, a cooldown, a refusal, the board unreachable or too busy to answer.
 FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
                             "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
-                            "StoreUnavailable"})
+                            "StoreUnavailable", "SeasonNotFound", "NotQualified"})
 
 
 @cache
