@@ -195,6 +195,9 @@ COMMANDS: dict[str, LazyCommand] = {
                                        "another board."),
           ("import", "import_command", "Load a `drboard export` file into this board; importing "
                                        "twice changes nothing.")),
+    **_at("seasons",
+          ("season", "season_group", "Organisers: make a season out of boards, with points, "
+                                     "best-of, weights and a final.")),
     **_at("account",
           ("alias", "alias", "Claim NAME as the racer alias you push as, or show the one you hold."),
           ("configure", "configure", "Choose the board the commands talk to, and save it in your "

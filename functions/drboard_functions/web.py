@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from datetime import datetime
 from html import escape
 from urllib.parse import quote, urlencode
@@ -27,6 +27,7 @@ from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, design_facts, fact_text
 from .models.domain import BoardStatus, Design
+from .models.seasons import SeasonLink
 from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
 REFRESH_S = 30
@@ -194,6 +195,10 @@ def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
 
 
+def season_path(season_id: str) -> str:
+    return "/seasons/" + quote(season_id, safe="") + "/view"
+
+
 def design_summary(design: Design | None) -> str:
     return _design_summary(design, sensors=True)
 
@@ -226,10 +231,12 @@ def index_page(boards: Iterable[BoardView]) -> str:
 
 
 def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: datetime,
-               url: str = "", endpoint: str = "", qr_svg: str = "") -> str:
-    """``/boards/{board}/view``: the board's status, window and rules, how to push, and the
-    standings with gaps to the leader and each model's design. ``screen`` is the big-screen
-    mode: sized for a room, a QR code of the page (``qr_svg``), auto-scrolling."""
+               url: str = "", endpoint: str = "", qr_svg: str = "",
+               seasons: Sequence[SeasonLink] = ()) -> str:
+    """``/boards/{board}/view``: the board's status, window and rules, the seasons it counts
+    for, how to push, and the standings with gaps to the leader and each model's design.
+    ``screen`` is the big-screen mode: sized for a room, a QR code of the page (``qr_svg``),
+    auto-scrolling."""
     board = page.board
     rows = [_entry_row(board.board_id, entry) for entry in page.entries]
     if rows:
@@ -249,7 +256,7 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
     head = (f'<p class="sub">{_status_badge(board.status)} {_window(board, now)}</p>'
             + (f'<p class="sub">{escape(board.description)}</p>' if board.description else "")
             + f'<p class="rules">{escape(rules_line(board))}</p>'
-            + _how_to_push(board, endpoint))
+            + _season_line(seasons) + _how_to_push(board, endpoint))
     if qr_svg:
         head = (f'<div class="board-head"><div>{head}</div><figure class="qr" role="img" '
                 f'aria-label="QR code of this page: {escape(url)}">{qr_svg}</figure></div>')
@@ -475,6 +482,17 @@ def _until(moment: datetime, now: datetime) -> str:
     left = max(0, int((moment - now).total_seconds()))
     return (f'<time data-until="{escape(moment.isoformat())}" datetime="{escape(moment.isoformat())}">'
             f"{escape(duration(left))}</time>")
+
+
+def _season_line(seasons: Sequence[SeasonLink]) -> str:
+    """Which seasons the board counts for, and whose final it is (its only entrants are that
+    season's qualifiers)."""
+    if not seasons:
+        return ""
+    said = [("the final of " if link.final else "a round of ")
+            + f'<a href="{escape(season_path(link.season_id))}">{escape(link.title)}</a>'
+            + (" (only its qualifiers race)" if link.final else "") for link in seasons]
+    return f'<p class="rules">This board is {"; ".join(said)}.</p>'
 
 
 def _how_to_push(board: BoardView, endpoint: str) -> str:

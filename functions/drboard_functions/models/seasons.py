@@ -14,7 +14,7 @@ from typing import Annotated, Literal, Self
 
 from pydantic import Field, model_validator
 
-from .domain import BoardId, BoardStatus, Description, Model, Moment, Title
+from .domain import BoardId, BoardStatus, Description, Model, Title
 
 #: The league's position points: 1st to 10th.
 LEAGUE_POINTS = (25, 18, 15, 12, 10, 8, 6, 4, 2, 1)
@@ -28,6 +28,8 @@ MAX_POINTS = 10_000
 MAX_WEIGHT = 10.0
 #: The most qualifiers a final may take.
 MAX_FINALISTS = 1000
+#: ``/seasons/view`` is the page listing the seasons: no season has this id.
+RESERVED_ID = "view"
 
 SeasonId = BoardId
 Points = Annotated[int, Field(ge=0, le=MAX_POINTS)]
@@ -137,11 +139,18 @@ class RoundResults(Model):
 class SeasonSpec(Model):
     """A new season: its id, title, points table and how many rounds count (all, by default)."""
 
-    season_id: Annotated[SeasonId, Field(description="Letters, digits, `_`, `-` and `.`; up to 64.")]
+    season_id: Annotated[SeasonId, Field(description="Letters, digits, `_`, `-` and `.`; up to 64; "
+                                                     "not `view`.")]
     title: Title
     description: Description = ""
     points: PointsTable = PointsTable()
     best_of: BestOf | None = None
+
+    @model_validator(mode="after")
+    def _not_the_list_page(self) -> Self:
+        if self.season_id == RESERVED_ID:
+            raise ValueError(f"{RESERVED_ID!r} is the seasons' page: give the season another id")
+        return self
 
 
 class SeasonChanges(Model):

@@ -67,7 +67,8 @@ def board_view(board: BoardId, service: Service, request: Request, limit: Limit 
     origin = _origin(request.resolved_event)
     url = origin + web.board_path(board_id)
     html = web.board_page(page, etag, screen=screen, now=service.clock(), url=url,
-                          endpoint=origin, qr_svg=web.qr_svg(url) if screen else "")
+                          endpoint=origin, qr_svg=web.qr_svg(url) if screen else "",
+                          seasons=service.board_seasons(board_id))
     return page_answer(html, headers=LIVE_PAGE_HEADERS | etag_headers(etag))
 
 

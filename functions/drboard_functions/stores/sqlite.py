@@ -31,7 +31,6 @@ from ..models.domain import (
     WriteOutcome,
 )
 from . import rank_buckets
-from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
 from .base import (
     AliasConflict,
     AuditSlice,
@@ -47,6 +46,7 @@ from .base import (
     read_page_token,
     stored_record,
 )
+from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (

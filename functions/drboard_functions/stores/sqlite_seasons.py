@@ -43,7 +43,8 @@ class SqliteSeasons:
     transaction."""
 
     if TYPE_CHECKING:  # what SqliteStore gives
-        _db: sqlite3.Connection
+        @property
+        def _db(self) -> sqlite3.Connection: ...
 
         def _write(self) -> AbstractContextManager[sqlite3.Connection]: ...
 

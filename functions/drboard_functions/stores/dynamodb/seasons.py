@@ -31,7 +31,7 @@ from .transaction import Slots
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
-    from mypy_boto3_dynamodb.type_defs import QueryInputTypeDef
+    from mypy_boto3_dynamodb.type_defs import PutTypeDef, QueryInputTypeDef
 
     from .codecs import Item
 
@@ -93,7 +93,7 @@ class DynamoDbSeasons:
     def save_season(self, season: Season, links: Mapping[str, SeasonLink | None],
                     forget: Sequence[str] = ()) -> Season:
         slots = Slots()
-        put: dict[str, Any] = {"TableName": self.table, "Item": season_item(season)}
+        put: PutTypeDef = {"TableName": self.table, "Item": season_item(season)}
         if season.version == 1:
             put["ConditionExpression"] = "attribute_not_exists(sk)"
         else:

@@ -1,9 +1,9 @@
 """The cloud board: one DynamoDB table (its one definition is ``BoardTable`` in template.yaml).
 
 How each thing is kept as an item is in ``codecs.py``; a push's transaction in
-``transaction.py``; the rank counters in ``ranks.py``; seasons in ``seasons.py``. Aliases are claimed in one transaction
-that writes the alias's item and its sign-in's on condition that neither exists. Only this
-package talks to DynamoDB.
+``transaction.py``; the rank counters in ``ranks.py``; seasons in ``seasons.py``. Aliases are
+claimed in one transaction that writes the alias's item and its sign-in's on condition that
+neither exists. Only this package talks to DynamoDB.
 """
 
 from __future__ import annotations
