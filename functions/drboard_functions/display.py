@@ -87,8 +87,12 @@ def points_rule(points: PointsTable, best_of: int | None, rounds: list[RoundView
         parts = [f"Points {listed} for places 1 to {len(points.positions)}"]
     if points.participation:
         parts[0] += f", and {points.participation} for taking part"
-    parts.append(f"the best {best_of} of {len(rounds)} rounds count" if best_of
-                 else "every round counts")
+    if best_of is None:
+        parts.append("every round counts")
+    elif best_of < len(rounds):
+        parts.append(f"the best {best_of} of {len(rounds)} rounds count")
+    else:
+        parts.append(f"each racer's best {best_of} rounds count")
     for r in rounds:
         said = ([f"counts ×{r.weight:g}"] if r.weight != 1 else []) + (
             ["always counts"] if r.always_counts else [])

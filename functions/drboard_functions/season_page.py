@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 #: Racers on one page of the big screen, and how long it shows before the next.
 SCREEN_ROWS = 15
-SCREEN_HOLD_S = 20
+SCREEN_HOLD_S = 15
 #: With one page, how often the big screen shows the standings afresh.
 SCREEN_REFRESH_S = 30
 #: The widths of the big screen's columns, in ems (the racer's name takes what is left).
