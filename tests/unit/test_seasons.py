@@ -269,6 +269,17 @@ def test_rounds_are_added_changed_and_removed(service: LeaderboardService) -> No
         service.add_round(SEASON, "nowhere")
 
 
+def test_rounds_are_numbered_in_the_order_their_boards_open(service: LeaderboardService) -> None:
+    service.create_board(BoardSpec(board_id="december", title="Season final", track="reInvent2019",
+                                   opens_at=T0 + timedelta(days=330)))
+    service.add_round(SEASON, "december", RoundSpec(weight=2))  # announced first
+    service.add_round(SEASON, "feb")
+    service.add_round(SEASON, "jan")
+    season = service.add_round(SEASON, "feb", RoundSpec(weight=1.5))
+    assert [(r.number, r.board_id, r.weight) for r in season.season.rounds] == [
+        (1, "jan", 1), (2, "feb", 1.5), (3, "december", 2)]
+
+
 def test_a_season_has_a_bounded_number_of_rounds(service: LeaderboardService) -> None:
     for n in range(MAX_ROUNDS):
         board_id = f"night-{n:02d}"

@@ -64,12 +64,18 @@ class PointsTable(Model):
 
 class SeasonRound(Model):
     """One round of a season: a board, how much its points weigh, and whether it always counts
-    (a final is never dropped by best-of)."""
+    (a final is never dropped by best-of). ``starts_at`` is when its board opens (or was made,
+    opening at once): a season numbers its rounds in that order, whatever order they were added
+    in."""
 
     board_id: str
     weight: Weight = 1.0
     always_counts: bool = False
     added_at: datetime
+    starts_at: datetime | None = None
+
+    def order(self) -> tuple[datetime, datetime]:
+        return (self.starts_at or self.added_at, self.added_at)
 
 
 class SeasonFinal(Model):

@@ -101,17 +101,18 @@ class Seasons:
 
     def add_round(self, season_id: str, board_id: str, spec: RoundSpec | None = None) -> SeasonStandings:
         """Make the board a round of the season, or change a round's weight and whether it
-        always counts."""
+        always counts. Rounds are numbered in the order their boards open."""
         spec = spec or RoundSpec()
         season = self._open(season_id)
-        self.keeper.require(board_id)
+        board = self.keeper.require(board_id).board
         existing = season.round(board_id)
         if existing is None and len(season.rounds) >= MAX_ROUNDS:
             raise InvalidQuery(f"a season has at most {MAX_ROUNDS} rounds")
         added = SeasonRound(board_id=board_id, weight=spec.weight, always_counts=spec.always_counts,
-                            added_at=existing.added_at if existing else self.clock())
-        rounds = ([added if r.board_id == board_id else r for r in season.rounds] if existing
-                  else [*season.rounds, added])
+                            added_at=existing.added_at if existing else self.clock(),
+                            starts_at=board.opens_at or board.created_at)
+        others = [r for r in season.rounds if r.board_id != board_id]
+        rounds = sorted([*others, added], key=SeasonRound.order)
         return self._save(season, season.model_copy(update={"rounds": rounds}))
 
     def remove_round(self, season_id: str, board_id: str) -> SeasonStandings:
