@@ -63,7 +63,7 @@ def rows(page: Any) -> list[str]:
 
 
 def test_the_desktop_page_shows_every_racer_and_round(season: Served, new_page: Any) -> None:
-    page = new_page(1280, 900)
+    page = new_page(1920, 1080)
     page.goto(f"{season.url}/seasons/{SEASON}/view")
     expect(page.locator("h1")).to_have_text("Club season 2026")
     assert len(rows(page)) == len(RACERS)
@@ -74,7 +74,8 @@ def test_the_desktop_page_shows_every_racer_and_round(season: Served, new_page: 
     expect(page.locator("h1")).to_have_text("Race night 1")
     page.locator("p.rules a", has_text="Club season 2026").click()
     expect(page.locator("h1")).to_have_text("Club season 2026")
-    shot(page, "season-1280x900")
+    page.goto(f"{season.url}/seasons/{SEASON}/view")
+    shot(page, "season-1920x1080")
 
 
 @pytest.mark.parametrize(("width", "height"), [(1920, 1080), (3840, 2160)])
