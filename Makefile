@@ -24,7 +24,7 @@ UNUSED = aws_lambda_powertools/event_handler/openapi/swagger_ui/*.js \
 # integrations other than botocore's, pydantic.v1, pydantic.experimental and pydantic's mypy
 # plugin stay source-only, which keeps the bundle small.
 # bench/bench_functions.py counts the modules a cold start still compiles (should be none).
-PRECOMPILED = drboard_assembler drboard_functions segno typing_extensions.py annotated_types \
+PRECOMPILED = drboard_assembler drboard_functions segno jinja2 markupsafe typing_extensions.py annotated_types \
 	typing_inspection pydantic pydantic_core wrapt aws_xray_sdk/*.py aws_xray_sdk/core \
 	aws_xray_sdk/ext/*.py aws_xray_sdk/ext/botocore aws_lambda_powertools/*.py \
 	aws_lambda_powertools/event_handler aws_lambda_powertools/exceptions \
@@ -32,10 +32,11 @@ PRECOMPILED = drboard_assembler drboard_functions segno typing_extensions.py ann
 	aws_lambda_powertools/middleware_factory aws_lambda_powertools/shared \
 	aws_lambda_powertools/tracing aws_lambda_powertools/warnings \
 	aws_lambda_powertools/utilities/__init__.py aws_lambda_powertools/utilities/data_classes \
+	aws_lambda_powertools/utilities/batch \
 	aws_lambda_powertools/utilities/jmespath_utils aws_lambda_powertools/utilities/typing
 NOT_PRECOMPILED = (^|/)pydantic/(v1/|experimental/|mypy\.py)
 
-build-PushFunction build-PullFunction build-AdminFunction:
+build-PushFunction build-PullFunction build-AdminFunction build-NotifyFunction:
 	@$(LAMBDA_PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' || { \
 		echo "LAMBDA_PYTHON=$(LAMBDA_PYTHON) is not Python 3.13, the runtime's: the .pyc would" \
 		"not load. Put python3.13 on PATH or pass LAMBDA_PYTHON=/path/to/python3.13." >&2; exit 1; }

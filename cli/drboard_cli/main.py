@@ -35,7 +35,7 @@ BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardM
                               "UnsupportedBody", "SeasonExists", "SeasonLocked"})
 #: The domain errors that are failures (exit 1): nothing found, a closed board, a used-up
 #: submission limit, a cooldown, a refusal, the board unreachable or too busy to answer.
-FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "TooSoon", "BoardClosed",
+FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "WebhookNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
                             "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
                             "StoreUnavailable", "SeasonNotFound", "NotQualified"})
@@ -211,7 +211,9 @@ COMMANDS: dict[str, LazyCommand] = {
                            "shows.")),
     **_at("hosting",
           ("serve", "serve", "Host the board over HTTP with the cloud board's own API, e.g. on an "
-                             "event laptop.")),
+                             "event laptop."),
+          ("joins", "joins", "Organisers: the join code of `drboard serve` and the racers who "
+                             "joined with it.")),
 }
 
 

@@ -1,45 +1,37 @@
-"""A season's web page (``templates/season.html``, ``static/season.css``) and the list of
-seasons (``templates/seasons.html``): server-rendered with Jinja2, which escapes everything an
-organiser or a racer supplied; links are built with :func:`urllib.parse.quote`.
+"""A season's web page (``templates/season.html``) and the list of seasons
+(``templates/seasons.html``), rendered as the other pages are (:mod:`.web`: the same templates'
+environment, style sheet and Content-Security-Policy).
 
 The page shows the standings (rank, racer, points, each round's place and points, the rounds
 that do not count struck out, the final's qualifiers marked Q), the points table and the
 tie-breaks, and the rounds with links to their boards. ``?screen=1`` is its big-screen mode: a
-projector's page of racers at a time in type sized from the screen, the next page after a
-while (its one small script, or a refresh without script), and a QR code of the page.
-
-Each page carries its own Content-Security-Policy: its style (and the screen's script) inlined
-and allowed by hash, nothing else loaded.
-
-Jinja2 is imported, and the templates loaded, on the first page a process renders.
+projector's page of racers at a time in type sized from the screen (the more rounds, the
+smaller), the next page after a while (its one small script, ``static/season-screen.js``,
+allowed by its hash; without script a link), and a QR code of the page.
 """
 
 from __future__ import annotations
 
-import base64
-import hashlib
 import math
 from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
-from typing import TYPE_CHECKING, Any
+from typing import Any
 from urllib.parse import urlencode
 
+from . import web
 from .display import ordinal, points_rule, points_text
 from .models.domain import BoardStatus
 from .models.seasons import RoundView, SeasonStandings, SeasonSummary, Standing
-from .web import board_path, qr_svg, season_path
-
-if TYPE_CHECKING:
-    from jinja2 import Environment
 
 #: Racers on one page of the big screen, and how long it shows before the next.
 SCREEN_ROWS = 15
 SCREEN_HOLD_S = 15
 #: With one page, how often the big screen shows the standings afresh.
 SCREEN_REFRESH_S = 30
-#: The widths of the big screen's columns, in ems (the racer's name takes what is left).
-_SCREEN_EMS = {"rank": 2.2, "total": 3.6, "round": 2.8, "racer": 10.0}
+#: The big screen's type buckets (the style sheet's ``fit-N``): up to N rounds.
+_FITS = ((8, ""), (12, "fit-12"), (18, "fit-18"))
+_WIDEST = "fit-30"
 
 
 @dataclass(frozen=True)
@@ -49,27 +41,21 @@ class Page:
 
 
 @cache
-def _environment() -> Environment:
-    from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
-
-    return Environment(loader=PackageLoader("drboard_functions", "templates"),
-                       autoescape=select_autoescape(default=True, default_for_string=True),
-                       undefined=StrictUndefined)
+def _screen_script() -> str:
+    return (files("drboard_functions") / "static" / "season-screen.js").read_text("utf-8")
 
 
-@cache
-def _static(name: str) -> str:
-    return (files("drboard_functions") / "static" / name).read_text("utf-8")
+def _policy(script: bool) -> str:
+    policy = web.content_security_policy(live=False)
+    return policy + (f"; script-src '{web.csp_hash(_screen_script())}'" if script else "")
 
 
-def _hash(text: str) -> str:
-    return "sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode()
-
-
-def _policy(style: str, script: str | None) -> str:
-    policy = (f"default-src 'none'; style-src '{_hash(style)}'; base-uri 'none'; "
-              "form-action 'none'; frame-ancestors 'none'")
-    return policy + (f"; script-src '{_hash(script)}'" if script else "")
+def _render(template: str, *, heading: str, subtitle: str, screen: bool = False,
+            **context: Any) -> str:
+    """A page on the templates' ``base.html``, as :mod:`.web` renders its own (never live)."""
+    return web.environment().get_template(template).render(
+        title=f"{heading} · drboard", heading=heading, subtitle=subtitle, live=None, screen=screen,
+        refresh_s=web.REFRESH_S, assets=web.assets(), **context)
 
 
 def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
@@ -78,7 +64,7 @@ def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
     big screen the ``part``-th page of ``SCREEN_ROWS`` racers, with a QR code of ``url``."""
     season = view.season
     rows = view.standings
-    path = season_path(season.season_id)
+    path = web.season_path(season.season_id)
     shown = ""
     next_screen = None
     hold_s = SCREEN_REFRESH_S
@@ -92,18 +78,17 @@ def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
         rows = rows[first:first + SCREEN_ROWS]
         following = part % parts + 1
         next_screen = path + "?" + urlencode({"screen": 1, **({"part": following} if parts > 1 else {})})
-    style = _static("season.css") + (_screen_font(len(season.rounds)) if screen else "")
-    script = _static("season-screen.js") if next_screen else None
     final = None
     if season.final is not None:
         source = (f"round {_round_number(season.rounds, season.final.from_round)}"
                   if season.final.from_round else "the season")
-        final = {"title": season.final.title, "path": board_path(season.final.board_id),
+        final = {"title": season.final.title, "path": web.board_path(season.final.board_id),
                  "text": f"The final takes the top {season.final.top} of {source}"}
     racers = len(view.standings) if view.next_cursor is None else f"{len(view.standings)}+"
-    html = _environment().get_template("season.html").render(
-        season=season, screen=screen, style=style, script=script, hold_s=hold_s,
-        next_screen=next_screen, shown=shown,
+    html = _render(
+        "season.html", heading=season.title, screen=screen, season=season,
+        fit=_fit(len(season.rounds)) if screen else "",
+        screen_script=_screen_script(), hold_s=hold_s, next_screen=next_screen, shown=shown,
         status_class=season.status.lower(), status_text="Running" if season.status == "OPEN" else "Ended",
         subtitle=" · ".join(bit for bit in (
             _count(len(season.rounds), "round"), f"{racers} racers", shown) if bit),
@@ -113,25 +98,24 @@ def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
         next_page=(path + "?" + urlencode({"cursor": view.next_cursor})
                    if view.next_cursor and not screen else None),
         screen_path=path + "?screen=1",
-        qr={"svg": qr_svg(url), "url": url} if screen and url else None,
+        qr={"svg": web.qr_svg(url), "url": url} if screen and url else None,
     )
-    return Page(html, _policy(style, script))
+    return Page(html, _policy(script=next_screen is not None))
 
 
 def seasons_page(seasons: list[SeasonSummary]) -> Page:
     """``/seasons/view``: every season, running and past."""
-    style = _static("season.css")
-    listed = [{"path": season_path(s.season_id), "title": s.title, "rounds": s.rounds,
+    listed = [{"path": web.season_path(s.season_id), "title": s.title, "rounds": s.rounds,
                "status_class": s.status.lower(), "status_text": "Running" if s.status == "OPEN" else "Ended"}
               for s in seasons]
-    html = _environment().get_template("seasons.html").render(style=style, seasons=listed)
-    return Page(html, _policy(style, None))
+    return Page(_render("seasons.html", heading="Seasons",
+                        subtitle="Race nights added up: the running seasons and the past ones.",
+                        seasons=listed), _policy(script=False))
 
 
-def _screen_font(rounds: int) -> str:
-    ems = (_SCREEN_EMS["rank"] + _SCREEN_EMS["total"] + _SCREEN_EMS["racer"]
-           + _SCREEN_EMS["round"] * rounds)
-    return f"\nmain.screen {{ font-size: min(2.7vh, {96 / ems:.3f}vw); }}\n"
+def _fit(rounds: int) -> str:
+    """The big screen's type bucket for this many rounds."""
+    return next((fit for most, fit in _FITS if rounds <= most), _WIDEST)
 
 
 def _count(n: int, noun: str) -> str:
@@ -147,14 +131,14 @@ def _round(r: RoundView) -> dict[str, Any]:
     states = {BoardStatus.OPEN: "open", BoardStatus.UPCOMING: "not open yet",
               BoardStatus.CLOSED: "closed"}
     missing = r.status == "MISSING"
-    return {"number": r.number, "title": r.title, "path": None if missing else board_path(r.board_id),
+    return {"number": r.number, "title": r.title, "path": None if missing else web.board_path(r.board_id),
             "weight_text": f"×{r.weight:g}" if r.weight != 1 else "", "always_counts": r.always_counts,
             "state": "board deleted: its results do not count" if missing else
                      f"{states[BoardStatus(r.status)]}, {_count(r.participants, 'racer')}"}
 
 
 def _row(standing: Standing) -> dict[str, Any]:
-    css = [f"p{standing.rank}"] if standing.rank <= 3 else []
+    css = [f"q{standing.rank}"] if standing.rank <= 3 else []
     if standing.qualified_for_final:
         css.append("qualified")
     finishes = []

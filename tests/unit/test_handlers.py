@@ -39,8 +39,8 @@ ADMIN_EVENTS = ["admin_create_board.json", "admin_update_board.json", "admin_clo
                 "admin_delete_board.json", "admin_restore_board.json", "admin_import_board.json",
                 "admin_import_submission.json", "admin_export_board.json", "admin_remove_entry.json",
                 "admin_ban_racer.json", "admin_unban_racer.json", "admin_audit.json",
-                "admin_create_season.json", "admin_add_round.json", "admin_set_final.json",
-                "admin_close_season.json"]
+                "admin_rebuild_ranks.json", "admin_create_season.json", "admin_add_round.json",
+                "admin_set_final.json", "admin_close_season.json"]
 #: A season's reads: answered once the season exists (tests/integration/test_template_seasons.py).
 SEASON_EVENTS = ["season_standings.json", "season_view.json"]
 
@@ -186,6 +186,14 @@ def test_an_organiser_manages_the_winter_cup_with_the_admin_events(
     assert service.boards() == []
     assert admin_call("admin_restore_board.json")[0] == 200
     assert [b.board_id for b in service.boards()] == ["winter-cup-2026"]
+
+
+def test_an_organiser_builds_a_boards_rank_counters_with_the_admin_event(
+        service: LeaderboardService) -> None:
+    service.push(event_record())
+    status, built = admin_call("admin_rebuild_ranks.json")
+    assert (status, built) == (200, {"board_id": "reInvent2019_track", "done": True,
+                                     "counted": 1, "participants": 1})
 
 
 def test_an_organiser_imports_last_seasons_cup_and_exports_it(service: LeaderboardService) -> None:

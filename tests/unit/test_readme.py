@@ -22,7 +22,11 @@ def _readme_commands() -> list[str]:
 def test_quick_start_has_exactly_two_commands() -> None:
     commands = _readme_commands()
     assert len(commands) == 2
-    assert "drboard push examples/*/" in commands[0]
+    assert "push examples/*/" in commands[0]
+    # the examples go to a demo board of their own, never the user's default board
+    demo = re.search(r"drboard (--db \S+) push examples/\*/", commands[0])
+    assert demo, commands[0]
+    assert f"drboard {demo[1]} pull" in commands[0]
     assert "pytest" in commands[1]
 
 

@@ -27,7 +27,7 @@ def _board_id(track: str | None, board: str | None) -> str:
 def _racer(racer: str | None) -> str:
     from .. import config
 
-    racer = racer or config.load_settings().get("racer")
+    racer = racer or config.default_racer()
     if not racer:
         raise click.UsageError("give --racer (no racer has pushed from this machine yet)")
     return str(racer)
@@ -173,13 +173,17 @@ def racer_options(command: Any) -> Any:
 
 @click.command()
 @racer_options
-@format_option
+@click.option("--format", "fmt", type=click.Choice(["table", "json", "csv"]), default="table",
+              show_default=True, help=FORMAT_HELP + " csv: one row per submission, for a "
+                                                    "notebook or a spreadsheet.")
 @pass_context
 def history(ctx: Context, racer: str | None, track: str | None, board: str | None,
             fmt: str) -> None:
     """A racer's submissions on every board, oldest first.
 
-    ★ marks each board's counted submission, the racer's best there.
+    ★ marks each board's counted submission, the racer's best there. --format csv writes them
+    over time for a notebook or a spreadsheet: submitted_at, board, model, qualified, time_s,
+    best_lap_s, laps completed, best completion, counted, flags.
     """
     from .. import render
 
@@ -187,10 +191,14 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
         name = _racer(racer)
         board_id = _board_id(track, board) if (track or board) else None
         items = ctx.board.history(name, board_id)
-        if fmt == "json":
+        if fmt == "csv":
+            from drboard_functions.laps import HISTORY_COLUMNS, csv_text, history_rows
+
+            click.echo(csv_text(HISTORY_COLUMNS, history_rows(items)), nl=False)
+        elif fmt == "json":
             click.echo(render.write_json([i.model_dump(mode="json") for i in items]), nl=False)
         elif items:
-            out().print(render.history_table(name, items))
+            out().print(render.history_table(name, items, out().width))
         else:
             out().print(f"No submissions by {name} yet.")
 
@@ -232,4 +240,4 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
         if fmt == "json":
             click.echo(summary.model_dump_json(indent=2))
         else:
-            out().print(render.status_table(summary))
+            out().print(render.status_table(summary, out().width))

@@ -207,3 +207,13 @@ class Insights(Model):
     field: int
     facts: list[SharedFact]
     points: list[SpeedPoint]
+
+
+class RankCounters(Model):
+    """How far the building of a board's rank counters got (a board from before them ranks by
+    counting its entries until they are built)."""
+
+    board_id: str
+    done: bool
+    counted: int = Field(description="Entries counted so far.")
+    participants: int

@@ -19,7 +19,15 @@ Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerat
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
 """
 
-from . import boards, organisers, pages, seasons, submissions  # noqa: F401 - each registers its routes
+from . import (  # noqa: F401 - each registers its routes
+    boards,
+    organisers,
+    pages,
+    results,
+    seasons,
+    submissions,
+    webhooks,
+)
 from .app import (
     COGNITO_PREFIX,
     ERROR_STATUS,

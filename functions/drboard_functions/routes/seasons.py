@@ -36,7 +36,7 @@ from .params import (
     segment,
     takes,
 )
-from .responses import PAGE_HEADERS, PAGE_RESPONSE, error_response, json_answer, json_response, page_answer
+from .responses import PAGE_RESPONSE, error_response, json_answer, json_response, page_answer
 
 SEASONS_TAG = "seasons"
 
@@ -116,8 +116,7 @@ def season_view(season: SeasonId, service: Service, request: Request, screen: Sc
 
 
 def _policy(page: season_page.Page) -> dict[str, str]:
-    return {"Content-Security-Policy": page.content_security_policy,
-            "Cache-Control": PAGE_HEADERS["Cache-Control"]}
+    return {"Content-Security-Policy": page.content_security_policy}
 
 
 # ---- organisers -------------------------------------------------------------------------------

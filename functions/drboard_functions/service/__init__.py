@@ -5,9 +5,10 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading), ``transfer`` (export and import) and ``seasons`` (boards added up into a
-season's standings, and its final). :class:`LeaderboardService` only hands
-each call to the room that answers it.
+trail's reading), ``transfer`` (export and import), ``results`` (laps to analyse),
+``webhooks`` (the chat's announcements) and ``seasons`` (boards added up into a season's
+standings, and its final).
+:class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Concatenate, ParamSpec, TypeVar
 
+from ..models.notices import EntryChange
 from ..stores.base import BoardStore, RecordArchive
 from .boards import (
     CUSTOM_PREFIX,
@@ -31,14 +33,16 @@ from .moderating import Moderating
 from .paging import DEFAULT_PAGE
 from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+from .results import LAPS_PAGE, Results
 from .seasons import Seasons
 from .transfer import Transfer
+from .webhooks import Webhooks
 
 P = ParamSpec("P")
 R = TypeVar("R")
 
 __all__ = [
-    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "MAX_COMPARED", "MAX_TOP", "Clock",
+    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "LAPS_PAGE", "MAX_COMPARED", "MAX_TOP", "Clock",
     "LeaderboardService", "board_for_track", "check_record_size", "default_board_id",
     "evaluation_fingerprints", "is_default_board_id", "racer_key", "scored_write", "utc_now",
 ]
@@ -72,6 +76,9 @@ class LeaderboardService:
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
         self._seasons = Seasons(keeper)
+        self._results = Results(keeper)
+        self._webhooks = Webhooks(keeper)
+        self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)
@@ -93,6 +100,7 @@ class LeaderboardService:
     close_board = _handed_to("_managing", Managing.close_board)
     delete_board = _handed_to("_managing", Managing.delete_board)
     restore_board = _handed_to("_managing", Managing.restore_board)
+    rebuild_ranks = _handed_to("_managing", Managing.rebuild_ranks)
 
     remove_entry = _handed_to("_moderating", Moderating.remove_entry)
     ban = _handed_to("_moderating", Moderating.ban)
@@ -115,3 +123,14 @@ class LeaderboardService:
     seasons_page = _handed_to("_seasons", Seasons.seasons_page)
     season = _handed_to("_seasons", Seasons.season)
     board_seasons = _handed_to("_seasons", Seasons.board_seasons)
+    laps_page = _handed_to("_results", Results.laps_page)
+    run_laps = _handed_to("_results", Results.run_laps)
+
+    add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
+    webhooks = _handed_to("_webhooks", Webhooks.webhooks)
+    remove_webhook = _handed_to("_webhooks", Webhooks.remove_webhook)
+    test_webhook = _handed_to("_webhooks", Webhooks.test_webhook)
+
+    def listen(self, listener: Callable[[EntryChange], None] | None) -> None:
+        """Tell ``listener`` of every entry a push improves, as it happens (None: no one)."""
+        self._keeper.listener = listener

@@ -6,7 +6,7 @@ from ..errors import BoardExists, BoardLocked, BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import BoardRules, BoardStatus
 from ..models.requests import BoardChanges, BoardSpec
-from ..models.views import BoardView
+from ..models.views import BoardView, RankCounters
 from .boards import (
     CUSTOM_PREFIX,
     LOCKED,
@@ -101,3 +101,11 @@ class Managing:
         view = self.keeper.save(stored.board.model_copy(update={"deleted_at": None}))
         self.keeper.audit(board_id, "restore", caller)
         return view
+
+    def rebuild_ranks(self, board_id: str, budget_s: float | None = None) -> RankCounters:
+        """Build the rank counters of a board from before them, for up to ``budget_s`` seconds
+        (None: to the end); a later call goes on where this one stopped."""
+        self.keeper.require(board_id)
+        built = self.store.build_rank_counters(board_id, budget_s=budget_s)
+        return RankCounters(board_id=board_id, done=built.done, counted=built.counted,
+                            participants=built.participants)

@@ -2,12 +2,12 @@
    the first again), each time fresh from the board. */
 (function () {
   "use strict";
-  var main = document.querySelector("main[data-next]");
-  if (!main) {
+  var page = document.querySelector("[data-next]");
+  if (!page) {
     return;
   }
-  var hold = Number(main.getAttribute("data-hold")) || 20;
+  var hold = Number(page.getAttribute("data-hold")) || 15;
   window.setTimeout(function () {
-    window.location.replace(main.getAttribute("data-next"));
+    window.location.replace(page.getAttribute("data-next"));
   }, hold * 1000);
 }());

@@ -9,6 +9,7 @@ neither exists. Only this package talks to DynamoDB.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from datetime import datetime, timedelta
 from typing import TYPE_CHECKING, Any
 
 import boto3
@@ -27,6 +28,7 @@ from ...models.domain import (
     SubmissionLimits,
     WriteOutcome,
 )
+from ...models.notices import Webhook
 from ..aws_errors import cancellation_codes, code_of, translating
 from ..base import (
     AliasConflict,
@@ -34,9 +36,11 @@ from ..base import (
     BoardHasEntries,
     BoardSlice,
     HistorySlice,
+    RankBuild,
     StoredBoard,
     StoredSubmissionPage,
     SubmissionPage,
+    delivered,
     page_token,
     read_page_token,
     stored_record,
@@ -47,8 +51,10 @@ from .codecs import (
     BOARD_SK,
     BOARDS_INDEX,
     FIRST_ENTRY,
+    NOTICE_PARTITION,
     RACER_INDEX,
     RANK_INDEX,
+    WEBHOOK_PARTITION,
     alias_items,
     audit_event_of,
     audit_item,
@@ -70,7 +76,7 @@ from .codecs import (
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
 from .seasons import DynamoDbSeasons
-from .transaction import PushTransaction, board_change
+from .transaction import PushTransaction
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
@@ -79,6 +85,8 @@ if TYPE_CHECKING:
     from .codecs import Item
 
 BATCH_GET_KEYS = 100
+#: How long the table keeps a sent marker (its time to live): past any retry of its event.
+NOTICE_TTL = timedelta(days=30)
 
 
 @translating("the board's table")
@@ -171,14 +179,14 @@ class DynamoDbStore(DynamoDbSeasons):
             current = self.get_entry(board_id, racer_key)
             if current is None:
                 return None
-            _, generation = self.ranks.generation(board_id)
+            state = self.ranks.state(board_id)
             try:
                 self.client.transact_write_items(TransactItems=[
                     {"Delete": {"TableName": self.table, "Key": key(board_id, entry_sk(racer_key)),
                                 "ConditionExpression": "rank_key = :seen",
                                 "ExpressionAttributeValues": {":seen": text(current.rank_key)}}},
-                    board_change(self.table, board_id, -1, generation),
-                    *self.ranks.changes(board_id, generation, None, current.score_key)])
+                    self.ranks.board_change(board_id, -1, state),
+                    *self.ranks.changes(board_id, state, None, current)])
             except ClientError as error:
                 if code_of(error) != "TransactionCanceledException":
                     raise
@@ -191,15 +199,15 @@ class DynamoDbStore(DynamoDbSeasons):
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 backoff(attempt)
-            exists, generation = self.ranks.generation(entry.board_id)
-            if not exists:
+            state = self.ranks.state(entry.board_id)
+            if not state.exists:
                 return
             try:
                 self.client.transact_write_items(TransactItems=[
                     {"Put": {"TableName": self.table, "Item": entry_item(entry),
                              "ConditionExpression": "attribute_not_exists(sk)"}},
-                    board_change(self.table, entry.board_id, +1, generation),
-                    *self.ranks.changes(entry.board_id, generation, entry.score_key, None)])
+                    self.ranks.board_change(entry.board_id, +1, state),
+                    *self.ranks.changes(entry.board_id, state, entry, None)])
             except ClientError as error:
                 if code_of(error) != "TransactionCanceledException":
                     raise
@@ -210,9 +218,10 @@ class DynamoDbStore(DynamoDbSeasons):
         raise StoreBusy(f"{entry.board_id!r} is busy with other pushes: gave up restoring the entry; "
                         "try again in a moment")
 
-    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
-        """Give a board from before the rank counters its counters (see ``RankCounters.build``)."""
-        return self.ranks.build(board_id, max_racers)
+    def build_rank_counters(self, board_id: str, budget_s: float | None = None) -> RankBuild:
+        """Count the entries of a board from before the rank counters into its counters (see
+        ``RankCounters.build``)."""
+        return self.ranks.build(board_id, budget_s=budget_s)
 
     def append_audit(self, event: AuditEvent) -> None:
         self.client.put_item(TableName=self.table, Item=audit_item(event),
@@ -258,6 +267,75 @@ class DynamoDbStore(DynamoDbSeasons):
     def alias_holder(self, racer_key: str) -> AliasClaim | None:
         item = self.get_item(ALIAS_PARTITION, f"K#{racer_key}")
         return claim_of(item) if item else None
+
+    # ---- webhooks and announcements -------------------------------------------------------
+
+    def put_webhook(self, webhook: Webhook) -> None:
+        self.client.put_item(TableName=self.table, Item={
+            **key(WEBHOOK_PARTITION, f"{webhook.target.key}#{webhook.webhook_id}"),
+            "data": text(webhook.model_dump_json())})
+
+    def webhooks(self, target_key: str) -> list[Webhook]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :partition AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":partition": text(WEBHOOK_PARTITION),
+                                          ":prefix": text(target_key + "#")}})
+        found = [Webhook.model_validate_json(item["data"]["S"]) for item in items]
+        return sorted((w for w in found if w.target.key == target_key),
+                      key=lambda w: (w.created_at, w.webhook_id))
+
+    def all_webhooks(self) -> list[Webhook]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :partition",
+            "ExpressionAttributeValues": {":partition": text(WEBHOOK_PARTITION)}})
+        return [Webhook.model_validate_json(item["data"]["S"]) for item in items]
+
+    def delete_webhook(self, target_key: str, webhook_id: str) -> Webhook | None:
+        answer = self.client.delete_item(TableName=self.table, ReturnValues="ALL_OLD",
+                                         Key=key(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}"))
+        old = answer.get("Attributes")
+        return Webhook.model_validate_json(old["data"]["S"]) if old else None
+
+    def note_delivery(self, target_key: str, webhook_id: str, at: datetime,
+                      error: str | None) -> None:
+        item = self.get_item(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}")
+        if item is None:
+            return
+        webhook = delivered(Webhook.model_validate_json(item["data"]["S"]), at, error)
+        try:
+            self.client.put_item(TableName=self.table, ConditionExpression="attribute_exists(sk)",
+                                 Item={**key(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}"),
+                                       "data": text(webhook.model_dump_json())})
+        except ClientError as problem:
+            if code_of(problem) != "ConditionalCheckFailedException":
+                raise  # removed meanwhile: nothing to note
+
+    def claim_notice(self, notice_id: str, webhook_id: str, now: datetime, lease_s: int) -> bool:
+        until = now + timedelta(seconds=lease_s)
+        try:
+            self.client.put_item(
+                TableName=self.table,
+                Item={**key(NOTICE_PARTITION, f"{notice_id}#{webhook_id}"),
+                      "state": text("sending"), "lease_until": text(ranking.timestamp(until)),
+                      "expires_at": {"N": str(int((now + NOTICE_TTL).timestamp()))}},
+                ConditionExpression="attribute_not_exists(sk) OR #state = :failed OR "
+                                    "(#state = :sending AND lease_until <= :now)",
+                ExpressionAttributeNames={"#state": "state"},
+                ExpressionAttributeValues={":failed": text("failed"), ":sending": text("sending"),
+                                           ":now": text(ranking.timestamp(now))})
+        except ClientError as problem:
+            if code_of(problem) != "ConditionalCheckFailedException":
+                raise
+            return False
+        return True
+
+    def finish_notice(self, notice_id: str, webhook_id: str, sent: bool) -> None:
+        self.client.update_item(
+            TableName=self.table, Key=key(NOTICE_PARTITION, f"{notice_id}#{webhook_id}"),
+            UpdateExpression="SET #state = :state", ExpressionAttributeNames={"#state": "state"},
+            ExpressionAttributeValues={":state": text("sent" if sent else "failed")})
 
     # ---- reads ----------------------------------------------------------------------------
 

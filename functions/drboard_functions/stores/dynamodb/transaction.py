@@ -24,7 +24,6 @@ from ...models.domain import AuditEvent, Entry, Submission, SubmissionLimits, Wr
 from ..aws_errors import cancellation_codes, code_of
 from ..base import FingerprintTaken, LimitReached
 from .codecs import (
-    BOARD_SK,
     audit_item,
     entry_item,
     fingerprint_item,
@@ -35,11 +34,11 @@ from .codecs import (
     tally_sk,
     text,
 )
-from .ranks import LAZY_BUILD_MAX_RACERS
+from .ranks import LAZY_BUILD_MAX_RACERS, RankState
 from .retries import MAX_ATTEMPTS, backoff
 
 if TYPE_CHECKING:
-    from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef, TransactWriteItemTypeDef
+    from mypy_boto3_dynamodb.type_defs import TransactWriteItemTypeDef
 
     from .store import DynamoDbStore
 
@@ -67,22 +66,6 @@ class Slots:
                 if code == FAILED}
 
 
-def board_change(table: str, board_id: str, change: int,
-                 generation: str | None) -> TransactWriteItemTypeDef:
-    """The board's number of racers changed by ``change``, and its version bumped, on
-    condition that its rank counters are still those of ``generation`` (None: none)."""
-    values: dict[str, AttributeValueTypeDef] = {":change": {"N": str(change)}, ":one": {"N": "1"}}
-    if generation is None:
-        condition = "attribute_exists(sk) AND attribute_not_exists(rank_generation)"
-    else:
-        condition = "rank_generation = :generation"
-        values[":generation"] = text(generation)
-    return {"Update": {
-        "TableName": table, "Key": key(board_id, BOARD_SK),
-        "UpdateExpression": "SET participants = participants + :change ADD board_version :one",
-        "ConditionExpression": condition, "ExpressionAttributeValues": values}}
-
-
 class PushTransaction:
     def __init__(self, store: DynamoDbStore, submission: Submission, record: Record, entry: Entry,
                  limits: SubmissionLimits | None, fingerprints: Sequence[str],
@@ -98,14 +81,16 @@ class PushTransaction:
 
     def run(self) -> WriteOutcome:
         board_id, racer = self.entry.board_id, self.entry.racer_key
-        exists, generation = self.store.ranks.generation(board_id)
-        if exists and generation is None:
-            generation = self.store.ranks.build(board_id, max_racers=LAZY_BUILD_MAX_RACERS)
+        ranks = self.store.ranks
+        state = ranks.state(board_id)
+        if state.exists and state.generation is None and state.building is None:
+            ranks.build(board_id, max_racers=LAZY_BUILD_MAX_RACERS)
+            state = ranks.state(board_id)
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 backoff(attempt)
             current = self.store.get_entry(board_id, racer)
-            slots = self._slots(current, generation)
+            slots = self._slots(current, state)
             try:
                 self.store.client.transact_write_items(TransactItems=slots.items)
             except ClientError as error:
@@ -119,9 +104,9 @@ class PushTransaction:
                 if "fingerprint" in failed:
                     raise FingerprintTaken(self._copied_from()) from None
                 if "board" in failed:
-                    # No board, or its rank counters were built meanwhile.
-                    exists, generation = self.store.ranks.generation(board_id)
-                    if not exists:
+                    # No board, or its rank counters were built (or a build moved) meanwhile.
+                    state = ranks.state(board_id)
+                    if not state.exists:
                         raise BoardNotFound(f"no board {board_id!r}") from None
                     continue
                 if not failed and "TransactionConflict" not in cancellation_codes(error):
@@ -131,7 +116,7 @@ class PushTransaction:
         raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up after {MAX_ATTEMPTS} "
                         "attempts, nothing was stored; try again in a moment")
 
-    def _slots(self, current: Entry | None, generation: str | None) -> Slots:
+    def _slots(self, current: Entry | None, state: RankState) -> Slots:
         board_id, entry = self.entry.board_id, self.entry
         slots = Slots()
         slots.add("submission", {"Put": {"TableName": self.table,
@@ -149,17 +134,16 @@ class PushTransaction:
         if current is None:
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "attribute_not_exists(sk)"}})
-            slots.add("board", board_change(self.table, board_id, +1, generation))
+            slots.add("board", self.store.ranks.board_change(board_id, +1, state))
         elif entry.rank_key < current.rank_key:
             # Exactly the entry read: the counters take its score off.
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "rank_key = :seen",
                                         "ExpressionAttributeValues": {":seen": text(current.rank_key)}}})
-            slots.add("board", board_change(self.table, board_id, 0, generation))
+            slots.add("board", self.store.ranks.board_change(board_id, 0, state))
         else:
             return slots  # not better: the entry stays as it is (entries only ever improve)
-        slots.extend("counters", self.store.ranks.changes(
-            board_id, generation, entry.score_key, current.score_key if current else None))
+        slots.extend("counters", self.store.ranks.changes(board_id, state, entry, current))
         return slots
 
     def _count_submission(self) -> Any:
