@@ -149,7 +149,7 @@ def test_the_final_refuses_racers_who_did_not_qualify(service: LeaderboardServic
         race(service, "final", "Cy")
     message = refused.value.message
     assert "'Cy' did not qualify" in message and "top 2 of the season" in message
-    assert "Ada, Bo" in message
+    assert "Ada, Bo" in message and message.endswith("Cy is 3rd with 30 points.")
     assert service.board_page("final").entries == [], "nothing stored"
     race(service, "final", "Bo", "Ada")  # the qualifiers race
     assert [e.racer for e in service.board_page("final").entries] == ["Bo", "Ada"]
@@ -173,8 +173,10 @@ def test_the_top_of_one_round_may_be_the_finals_entrants(service: LeaderboardSer
     for board_id in ("jan", "feb"):
         service.add_round(SEASON, board_id)
     service.set_final(SEASON, FinalSpec(board_id="final", top=1, from_round="feb"))
-    with pytest.raises(NotQualified, match="top 1 of its round 'feb': Cy"):
+    with pytest.raises(NotQualified, match=r"top 1 of its round 'feb': Cy\. Ada did not race it\."):
         race(service, "final", "Ada")
+    with pytest.raises(NotQualified, match=r"Bo finished 2nd there\."):
+        race(service, "final", "Bo")
     race(service, "final", "Cy")
     with pytest.raises(SeasonLocked, match="change or clear the final first"):
         service.remove_round(SEASON, "feb")

@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from ..cursors import decode_page_cursor, page_cursor
+from ..display import ordinal, points_text
 from ..errors import (
     BoardNotFound,
     InvalidQuery,
@@ -201,10 +202,12 @@ class Seasons:
             season = self.store.get_season(link.season_id)
             if season is None or season.final is None or season.final.board_id != board_id:
                 continue
-            qualified = self._qualifiers(season, self._results(season))
+            results = self._results(season)
+            qualified = self._qualifiers(season, results)
             if any(k == key for k, _ in qualified):
                 return
-            refusals.append(_refusal(season, [name for _, name in qualified]))
+            refusals.append(_refusal(season, [name for _, name in qualified])
+                            + " " + self._standing_of(season, results, key, racer))
         if refusals:
             raise NotQualified(f"{board_id!r} is a final: {racer!r} did not qualify for it. "
                                + " ".join(refusals))
@@ -275,6 +278,24 @@ class Seasons:
         if table is None or season.round(final.board_id) is not None:
             table = standings(season, results, without=final.board_id)
         return [(r.racer_key, r.standing.racer) for r in season_qualifiers(table, final.top)]
+
+    def _standing_of(self, season: Season, results: Mapping[str, RoundResults | None],
+                     key: str, racer: str) -> str:
+        """Where a racer who did not qualify stands, where the final's entrants come from."""
+        final = season.final
+        assert final is not None
+        if final.from_round is not None:
+            result = results.get(final.from_round)
+            finish = next((f for f in result.finishes if f.racer_key == key), None) if result else None
+            if finish is None:
+                return f"{racer} did not race it."
+            return (f"{racer} finished {ordinal(finish.rank)} there." if finish.qualified
+                    else f"{racer} raced it without a qualifying run.")
+        table = standings(season, results, without=final.board_id)
+        mine = next((r.standing for r in table if r.racer_key == key), None)
+        if mine is None or not mine.points:
+            return f"{racer} has no points in it."
+        return f"{racer} is {ordinal(mine.rank)} with {points_text(mine.points)} points."
 
     def _view(self, season: Season, boards: Mapping[str, StoredBoard],
               results: Mapping[str, RoundResults | None], table: Sequence[Ranked]) -> SeasonView:
