@@ -8,6 +8,7 @@ import re
 from typing import Any
 
 import pytest
+from drboard_functions import web
 from drboard_functions.models.seasons import SeasonList, SeasonStandings
 from drboard_functions.routes import openapi_document
 
@@ -217,3 +218,12 @@ def _row(html: str, racer: str) -> str:
     match = re.search(rf'<tr class="[^"]*" data-racer="{racer}">.*?</tr>', html, re.S)
     assert match, racer
     return match.group(0)
+
+
+def test_the_big_screens_qr_code_carries_the_address_racers_reach(season: Client) -> None:
+    # `drboard serve` tells the pages its network address: a screen opened as localhost on the
+    # serving laptop still gives phones an address they reach
+    season.app.append_context(invite=lambda: web.Invite(endpoint="http://192.168.1.20:8000",
+                                                        code="K7QM3XWD"))
+    html = season.get(f"/seasons/{SEASON}/view", screen="1")["body"]
+    assert 'aria-label="QR code of this page: http://192.168.1.20:8000/seasons/club-2026/view"' in html

@@ -17,7 +17,7 @@ from ..errors import InvalidQuery
 from ..models.domain import MAX_PAGE
 from ..models.seasons import FinalSpec, RoundSpec, SeasonChanges, SeasonList, SeasonSpec, SeasonStandings
 from .organisers import _admin_responses
-from .pages import _origin
+from .pages import _invite
 from .params import (
     ADMIN_TAG,
     DEFAULT_LIMIT,
@@ -110,7 +110,7 @@ def season_view(season: SeasonId, service: Service, request: Request, screen: Sc
                 part: Part = 1) -> Response[str]:
     season_id = segment(season)
     view = service.season(season_id, MAX_PAGE)
-    url = _origin(request.resolved_event) + web.season_path(season_id)
+    url = _invite(request).endpoint + web.season_path(season_id)  # the network's address on serve
     page = season_page.season_page(view, screen=screen, part=part, url=url)
     return page_answer(page.html, headers=_policy(page))
 
