@@ -188,7 +188,7 @@ def test_qualification_follows_moderation_of_the_rounds(service: LeaderboardServ
     race(service, "jan", "Ada", "Bo", "Cy")
     service.add_round(SEASON, "jan")
     service.set_final(SEASON, FinalSpec(board_id="final", top=2))
-    service.ban("jan", "Ada")
+    service.ban("jan", "Ada", everywhere=False)  # off the round, not banned from the final
     race(service, "final", "Cy")  # Cy moves up into the top 2
     with pytest.raises(NotQualified):
         race(service, "final", "Ada")
