@@ -63,9 +63,10 @@ def standings_table(standings: SeasonStandings, width: int = 120) -> Table:
     dim, one not raced a dash. On a wide terminal each round's place shows too."""
     season = standings.season
     wide = width >= 40 + 10 * len(season.rounds)
-    caption = "struck: a round that does not count"
+    notes = [f"struck: past the best {season.best_of}, not counted"] if season.best_of else []
     if season.final is not None:
-        caption += f" · {QUALIFIED_MARK}: qualifies for the final ({season.final.board_id})"
+        notes.append(f"{QUALIFIED_MARK}: qualifies for the final ({season.final.board_id})")
+    caption = " · ".join(notes) or None
     table = Table(title=f"{season.title} · {season.season_id}", caption=caption, header_style="bold")
     table.add_column("Rank", justify="right")
     table.add_column("Racer", overflow="fold")
