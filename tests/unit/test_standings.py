@@ -151,6 +151,16 @@ def test_an_organisers_change_is_answered_at_once(client: Client) -> None:
     assert client.get("/boards/spring-cup")["statusCode"] == 404
 
 
+def test_a_season_taking_a_board_in_is_shown_on_its_kept_page(client: Client) -> None:
+    client.send("POST", "/boards", cup_spec())
+    client.push(make_record("Ada", laps=lap(12000)), board="spring-cup")
+    assert "a round of" not in client.get("/boards/spring-cup/view")["body"]
+    client.send("POST", "/seasons", {"season_id": "club", "title": "Club season"})
+    assert client.send("PUT", "/seasons/club/rounds/spring-cup", {})["statusCode"] == 200
+    assert 'a round of <a href="/seasons/club/view">Club season</a>' in \
+        client.get("/boards/spring-cup/view")["body"]
+
+
 @pytest.mark.parametrize("sent", ["{etag}", "W/{etag}", '"other", {etag}'])
 def test_the_etag_the_client_holds_answers_304_from_the_copy(client: Client, store: CountingStore,
                                                              sent: str) -> None:

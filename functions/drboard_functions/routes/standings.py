@@ -16,7 +16,8 @@ and in each warm Lambda container, keyed by the board and the page asked for, ea
 the version it was rendered from. The label is compared with the board's version at every read,
 so a copy is never answered for a newer version, whoever made it (a push in another container,
 another process writing the same SQLite file); a version changes with every push that changes
-the standings and with every organiser's change, in the same write. Copies are not written
+the standings and with every organiser's change (a season taking the board in or letting it go,
+too: its page links to them), in the same write. Copies are not written
 beside the board by the push: a page depends on the request too (the web page names the address
 the browser used and, on ``serve``, the join code), the big screen of a large board would not fit
 in a DynamoDB item, every writer (pushes, organisers, moderation, rechecks) would have to write
@@ -34,7 +35,7 @@ from __future__ import annotations
 import re
 import threading
 from collections import OrderedDict
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from http import HTTPStatus
@@ -47,6 +48,7 @@ from ..views import page_tag
 from .responses import HTML, PAGE_HEADERS, etag_headers, names_etag, page_etag, page_policy
 
 if TYPE_CHECKING:
+    from ..models.seasons import SeasonLink
     from ..models.views import BoardPage, BoardView
     from ..service import LeaderboardService
     from ..web import Invite
@@ -215,18 +217,21 @@ class Standings:
                          page.model_dump_json(), {"Content-Type": JSON} | cache, cache)
         assert invite is not None
         etag = page_etag(f"{wanted.kind}.{page_tag(page.board)}", wanted.limit, None)
-        html = _board_html(page, etag, invite, screen=wanted.kind == "screen", now=now)
+        html = _board_html(page, etag, invite, screen=wanted.kind == "screen", now=now,
+                           seasons=self.service.board_seasons(wanted.board_id))
         headers = {"Content-Type": HTML} | PAGE_HEADERS | page_policy(live=True) | etag_headers(etag)
         return _copy(page.board.version, fresh_until(page.board, now, countdown=True), etag, html,
                      headers, headers)
 
 
-def _board_html(page: BoardPage, etag: str, invite: Invite, *, screen: bool, now: datetime) -> str:
+def _board_html(page: BoardPage, etag: str, invite: Invite, *, screen: bool, now: datetime,
+                seasons: Sequence[SeasonLink]) -> str:
     from .. import web
 
     url = invite.join_url if invite.code else invite.endpoint + web.board_path(page.board.board_id)
     return web.board_page(page, etag, screen=screen, now=now, url=url, endpoint=invite.endpoint,
-                          qr_svg=web.qr_svg(url) if screen else "", join_code=invite.code)
+                          qr_svg=web.qr_svg(url) if screen else "", join_code=invite.code,
+                          seasons=seasons)
 
 
 class Answer(NamedTuple):
