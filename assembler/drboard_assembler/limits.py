@@ -12,6 +12,10 @@ MAX_LOG_FILES = 32
 MAX_ARCHIVE_MEMBERS = 10_000
 MAX_ARCHIVE_UNPACKED_BYTES = 1024 * MIB
 MAX_FILES_SCANNED = 10_000
+MAX_SNIFFED_FILES = 256  # files no name describes, whose head is read to tell what they hold
+SNIFF_BYTES = 64 * KIB
+MAX_TRAINING_ENTRIES = 5_000_000  # entries of all training metrics files together
+MAX_TRAINING_S = 366 * 24 * 3600  # a training's span, once its timestamps are checked
 
 MAX_RECORD_BYTES = 64 * KIB
 MAX_EVALUATION_RUNS = 50

@@ -17,6 +17,8 @@ from .record import Count, CurvePoint, EvaluationRun, Figure, Lap, Moment, Perce
 Trial = Annotated[int, Field(ge=0, le=100_000)]
 Episode = Annotated[int, Field(ge=0, le=100_000_000)]
 Finite = Annotated[Figure, Field(allow_inf_nan=False)]
+#: How far an entry's end minus its start may stray from its elapsed time (both are rounded).
+TIMESTAMP_TOLERANCE_MS = 1000
 
 
 class _Entry(BaseModel):
@@ -99,6 +101,9 @@ def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None
     duration_s = 0.0
     for data, name in files:
         entries = validate_json(_TrainingFile, data, name).metrics
+        if len(episodes) + len(entries) > limits.MAX_TRAINING_ENTRIES:
+            raise AssemblyError(name, "metrics", f"the training metrics hold over "
+                                f"{limits.MAX_TRAINING_ENTRIES:,} entries, past any training's")
         training = [e for e in entries if e.phase.strip().lower() == "training"]
         episodes.extend(training)
         duration_s = max(duration_s, _duration_s(entries))
@@ -108,7 +113,7 @@ def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None
     return TrainingSummary(
         track=training_track,
         episodes=len(episodes),
-        training_time_s=round(duration_s, 1),
+        training_time_s=round(min(duration_s, limits.MAX_TRAINING_S), 1),
         best_reward=max(rewards) if rewards else None,
         mean_reward=_round(sum(rewards) / len(rewards)) if rewards else None,
         best_completion_pct=max(completions, default=0.0),
@@ -119,11 +124,15 @@ def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None
 
 
 def _duration_s(entries: list[_TrainingEntry]) -> float:
-    starts = [e.start_time for e in entries if e.start_time is not None]
-    ends = [e.metric_time for e in entries if e.metric_time is not None]
-    if not starts or not ends:
+    """From the first episode's start to the last one's end, by the timestamps of the entries
+    whose timestamps agree with their own elapsed time (a timestamp that does not is nonsense,
+    and left out); the episodes' times added up where no entry's timestamps can be trusted."""
+    timed = [e for e in entries if e.start_time is not None and e.metric_time is not None
+             and abs(e.metric_time - e.start_time - e.elapsed_time_in_milliseconds) <= TIMESTAMP_TOLERANCE_MS]
+    if not timed:
         return sum(e.elapsed_time_in_milliseconds for e in entries) / 1000
-    return max(0.0, (max(ends) - min(starts)) / 1000)
+    ends = [e.metric_time or 0.0 for e in timed]
+    return max(0.0, (max(ends) - min(e.start_time or 0.0 for e in timed)) / 1000)
 
 
 def _curve(episodes: list[_TrainingEntry]) -> list[CurvePoint]:
