@@ -28,10 +28,10 @@ from .identity import Identity, Overrides, choose_track, first_text, identify, n
 from .inputs import Inputs, Loaded, Reader, read_inputs, use_params
 from .layout import RunFiles, find_run_files, shallowest
 from .logs import JobLog
-from .metrics import load_training
 from .params import RunParams, load_params
 from .reading import from_validation_error, read_bounded
 from .record import Design, Record, TrainingSummary, implausible_lap
+from .training import load_training
 
 __all__ = ["Overrides", "assemble", "planned_trials"]
 

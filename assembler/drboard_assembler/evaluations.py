@@ -24,11 +24,12 @@ from .metrics import load_evaluation
 from .params import RunParams
 from .record import EvaluationRun, Lap
 
-#: How far a lap's time read from a log may stray from the metrics file's (the log's first step
-#: comes one step after the lap starts; steps are 1/15 s).
-LAP_TIME_TOLERANCE_MS = 250
+#: How far a lap's time read from a log may stray from the metrics file's: the log's first step
+#: comes a step after the lap starts, and steps are 1/15 s (real pairs differ by under 25 ms;
+#: two evaluations of one model, by 5 ms and more on some of their laps).
+LAP_TIME_TOLERANCE_MS = 100
 #: How far a lap's first logged step may be from the start the metrics file gives it.
-LAP_START_TOLERANCE_MS = 1000
+LAP_START_TOLERANCE_MS = 500
 
 
 @dataclass(frozen=True)
@@ -81,7 +82,10 @@ def _with_logs(runs: list[Run], logs: list[JobLog], *, present: set[str], logs_a
     run of its own."""
     for log in logs:
         laps = log.laps()
-        index = next((i for i, run in enumerate(runs) if _wrote(log, laps, run.run)), None)
+        free = [i for i, run in enumerate(runs) if run.log is None]
+        index = next((i for i in free if _source_name(runs[i]) == _named_file(log)), None)
+        if index is None:
+            index = next((i for i in free if _wrote(log, laps, runs[i].run)), None)
         if index is not None:
             runs[index] = replace(runs[index], log=log,
                                   params=runs[index].params or _evaluation_params(log))
@@ -91,8 +95,17 @@ def _with_logs(runs: list[Run], logs: list[JobLog], *, present: set[str], logs_a
 
 
 def _names_present_file(log: JobLog, present: set[str]) -> bool:
-    named = log.params.metrics_file if log.params is not None else None
+    named = _named_file(log)
     return named is not None and named in present
+
+
+def _named_file(log: JobLog) -> str | None:
+    """The metrics file the log's job wrote, as its parameters name it."""
+    return log.params.metrics_file if log.params is not None else None
+
+
+def _source_name(run: Run) -> str:
+    return run.run.source.rsplit("/", 1)[-1]
 
 
 def _evaluation_params(log: JobLog) -> RunParams | None:
@@ -105,7 +118,7 @@ def _named(runs: list[Run], inputs: Inputs) -> list[Run]:
     not hold describe another run (the board flags it)."""
     evaluation_params = inputs.evaluation_params
     named_files = {p.metrics_file for p in evaluation_params if p.metrics_file}
-    described = {run.run.source.rsplit("/", 1)[-1] for run in runs if run.params is not None}
+    described = {_source_name(run) for run in runs if run.params is not None}
     foreign = bool(named_files) and not named_files & described
     lone = evaluation_params[0] if len(inputs.params) and len(evaluation_params) == 1 else None
     named = []
@@ -131,10 +144,12 @@ def _params_naming(metrics_name: str, evaluation_params: list[RunParams]) -> Run
 
 def _wrote(log: JobLog, laps: list[Lap], run: EvaluationRun) -> bool:
     """Whether the log is of the evaluation that wrote the run's metrics: as many laps, each of
-    the same completion, time and (where the metrics file says it) start, a step or so apart."""
+    the same status and completion, and of the same time and (where the metrics file says it)
+    start, a step or so apart."""
     starts = log.lap_starts_ms()
     return len(run.laps) == len(laps) and all(
         abs(lap.time_ms - logged.time_ms) <= LAP_TIME_TOLERANCE_MS
         and abs(lap.completion_pct - logged.completion_pct) <= 1.0
+        and lap.status.strip().lower() == logged.status.lower()
         and (lap.started_ms is None or abs(lap.started_ms - start) <= LAP_START_TOLERANCE_MS)
         for lap, logged, start in zip(run.laps, laps, starts, strict=True))

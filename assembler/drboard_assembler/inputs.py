@@ -41,7 +41,7 @@ class Reader:
         self.note(role, loaded.name, loaded.sha256, len(loaded.data))
 
     def use_log(self, log: JobLog) -> None:
-        role = "simulation_log" if log.is_evaluation or log.episodes else "training_log"
+        role = "training_log" if log.job == "training" else "simulation_log"
         self.note(role, log.name, log.sha256, log.size)
 
     def note(self, role: str, name: str, sha256: str, size: int) -> None:

@@ -289,7 +289,7 @@ class Design(Strict):
 
 
 class CurvePoint(Strict):
-    episode: Count
+    episode: Episodes
     reward: Figure
     completion_pct: Percent
 
