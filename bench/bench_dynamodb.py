@@ -34,14 +34,16 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the tests package: DynamoDB Local and the table from the template
 
 from drboard_functions import ranking  # noqa: E402
-from drboard_functions.models import Board, Design, Entry, Score  # noqa: E402
+from drboard_functions.models.domain import Board, Design, Entry, Score  # noqa: E402
 from drboard_functions.service import LeaderboardService, racer_key  # noqa: E402
+from drboard_functions.stores.base import RankBuild  # noqa: E402
 from drboard_functions.stores.dynamodb import (  # noqa: E402
     RANK_INDEX,
     DynamoDbStore,
     board_item,
     entry_item,
 )
+from drboard_functions.stores.dynamodb.ranks import RankCounters  # noqa: E402
 
 from tests.integration.dynamodb_local import DynamoDbLocal  # noqa: E402
 from tests.recordkit import make_record  # noqa: E402
@@ -254,7 +256,7 @@ def bench_ranks(report: Report, probes: list[Probe], args: argparse.Namespace) -
                    (time.perf_counter() - start) * 1000, "ms",
                    note=f"{queried:,} items read (a board before the counters; before them, every board)")
         start = time.perf_counter()
-        assert probe.store.build_rank_counters(probe.board_id) is not None
+        assert probe.store.build_rank_counters(probe.board_id).done
         report.add(f"build_rank_counters (once per board from before them) @ {probe.label}",
                    time.perf_counter() - start, "s")
         # Seeded racers have entries only; the last racer (0.5 % done) is pushed, record and all.
@@ -307,12 +309,19 @@ def bench_ranks(report: Report, probes: list[Probe], args: argparse.Namespace) -
                    target=f"<= {RANK_SCALING_MAX:.2f} x" if checked else "")
 
 
+class NeverBuilt(RankCounters):
+    def build(self, board_id: str, max_racers: int | None = None,
+              budget_s: float | None = None) -> RankBuild:
+        return RankBuild(done=False, counted=0, participants=0)
+
+
 class NoCounters(DynamoDbStore):
     """The store as it was before the rank counters: pushes move no counter, ranks count the
     better entries (on a board without counters)."""
 
-    def build_rank_counters(self, board_id: str, max_racers: int | None = None) -> str | None:
-        return None
+    def __init__(self, table_name: str, client: Any = None) -> None:
+        super().__init__(table_name, client)
+        self.ranks = NeverBuilt(self.client, table_name)
 
 
 def bench_contention(report: Report, server: DynamoDbLocal, args: argparse.Namespace) -> None:

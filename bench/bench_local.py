@@ -34,7 +34,7 @@ from drboard_assembler import __version__ as ASSEMBLER_VERSION
 from drboard_assembler.design import load_design
 from drboard_assembler.record import EvaluationRun, Lap, Record, SourceFile
 from drboard_functions import ranking
-from drboard_functions.models import Entry, Submission
+from drboard_functions.models.domain import Entry, Submission
 from drboard_functions.service import LeaderboardService, racer_key
 from drboard_functions.stores import rank_buckets
 from drboard_functions.stores.sqlite import SqliteStore

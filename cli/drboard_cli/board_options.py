@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, Final, TypeVar
 import click
 
 if TYPE_CHECKING:  # the models load when a board is created or changed, not for --help
-    from drboard_functions.models import BoardChanges, BoardSpec
+    from drboard_functions.models.requests import BoardChanges, BoardSpec
     from pydantic import BaseModel
 
 M = TypeVar("M", bound="BaseModel")
@@ -145,7 +145,7 @@ _FIELD_OF_OPTION = {
 
 def board_spec(options: Mapping[str, Any]) -> BoardSpec:
     """A new board from the options of ``drboard board create`` (unset ones take the defaults)."""
-    from drboard_functions.models import BoardSpec
+    from drboard_functions.models.requests import BoardSpec
 
     fields = {_FIELD_OF_OPTION[name]: value for name, value in options.items() if value is not None}
     opens_at, closes_at = fields.get("opens_at"), fields.get("closes_at")
@@ -156,7 +156,7 @@ def board_spec(options: Mapping[str, Any]) -> BoardSpec:
 
 def board_changes(options: Mapping[str, Any]) -> BoardChanges:
     """An update with only the options given; ``none`` clears (a cooldown cleared is no cooldown)."""
-    from drboard_functions.models import BoardChanges
+    from drboard_functions.models.requests import BoardChanges
 
     fields: dict[str, Any] = {}
     for name, value in options.items():

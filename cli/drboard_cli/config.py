@@ -33,6 +33,14 @@ def load_settings() -> dict[str, Any]:
     return value if isinstance(value, dict) else {}
 
 
+def default_racer() -> str | None:
+    """The racer commands mean when none is given: the one `drboard configure --racer` saved,
+    else the last racer who pushed from this machine (a push never replaces a saved one)."""
+    settings = load_settings()
+    racer = settings.get("racer") or settings.get("last_racer")
+    return str(racer) if racer else None
+
+
 def save_settings(**changes: Any) -> None:
     path = settings_path()
     settings = load_settings() | changes

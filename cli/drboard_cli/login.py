@@ -4,7 +4,10 @@ The board says how to sign in at ``/.well-known/drboard.json`` (its user pool, p
 hosted sign-in domain and scopes). Two ways in:
 
 - in a browser, with the OAuth 2 authorization code flow and PKCE (S256) on a loopback redirect
-  (``http://localhost:8765/callback``, the one the app client allows), through Authlib;
+  (``http://localhost:8765/callback``, the one the app client allows), through Authlib. On a
+  machine with no browser (a headless training machine) the address is printed instead, the
+  racer signs in on any other device, and pastes back the address the browser was sent to
+  (which does not load there, but holds the code) or the code alone;
 - with a user name and password, for machines with no browser, through pycognito's SRP (the
   password never leaves the machine); an invited racer's temporary password is replaced there.
 
@@ -24,7 +27,7 @@ from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 from http.server import BaseHTTPRequestHandler, HTTPServer
 from typing import Any
-from urllib.parse import parse_qs, urlsplit
+from urllib.parse import parse_qs, urlencode, urlsplit
 
 from drboard_functions.errors import BoardUnreachable, NotAuthorized, NotSignedIn
 from drboard_functions.identity import SignIn
@@ -162,6 +165,53 @@ def login_in_browser(endpoint: str, settings: SignIn, show: Callable[[str], None
     return _saved(endpoint, settings, {"AccessToken": answer["access_token"],
                                        "RefreshToken": answer.get("refresh_token"),
                                        "ExpiresIn": answer.get("expires_in", 3600)})
+
+
+def login_with_pasted_code(endpoint: str, settings: SignIn, show: Callable[[str], None],
+                           ask: Callable[[], str]) -> tokens.SavedToken:
+    """Sign in from a machine with no browser: ``show`` the sign-in address, then ``ask`` for
+    what the browser shows after signing in: the address it was sent back to
+    (``http://localhost:8765/callback?code=…&state=…``, which fails to load on another device,
+    but its address bar holds the code), or the code alone. PKCE binds the code to this
+    machine's verifier, so a code pasted alone is as safe as the redirect."""
+    from authlib.integrations.requests_client import OAuth2Session
+
+    settings = require_cognito(settings, endpoint)
+    if not settings.domain:
+        raise NotAuthorized(f"{endpoint} has no sign-in page: use `drboard login --password`")
+    session = OAuth2Session(settings.client_id, scope=" ".join(settings.scopes or ["openid"]),
+                            redirect_uri=REDIRECT_URI, code_challenge_method="S256")
+    verifier = secrets.token_urlsafe(64)
+    url, state = session.create_authorization_url(f"{settings.domain}/oauth2/authorize",
+                                                  code_verifier=verifier)
+    show(url)
+    received = pasted_redirect(ask(), state)
+    answer = session.fetch_token(f"{settings.domain}/oauth2/token", authorization_response=received,
+                                 code_verifier=verifier, state=state)
+    return _saved(endpoint, settings, {"AccessToken": answer["access_token"],
+                                       "RefreshToken": answer.get("refresh_token"),
+                                       "ExpiresIn": answer.get("expires_in", 3600)})
+
+
+def pasted_redirect(pasted: str, state: str) -> str:
+    """The redirect address to finish signing in with, from what the racer pasted: the whole
+    address (its state must be this sign-in's) or the code alone."""
+    text = pasted.strip().strip("'\"<>")
+    if not text:
+        raise NotSignedIn("nothing was pasted: run `drboard login --no-browser` again")
+    if "code=" in text or "error=" in text:
+        query = parse_qs(urlsplit(text).query or text.split("?", 1)[-1])
+        if "error" in query:
+            raise NotAuthorized(f"sign-in refused: {query.get('error_description', query['error'])[0]}")
+        if query.get("state", [state])[0] != state:
+            raise NotAuthorized("that address is from another sign-in (its state differs): paste "
+                                "the one this sign-in's page sent you to")
+        code = query.get("code", [""])[0]
+    else:
+        code = text
+    if not code or any(ch.isspace() for ch in code) or len(code) > 2048:
+        raise NotSignedIn("that is neither the address the sign-in page sent you to nor its code")
+    return f"{REDIRECT_URI}?{urlencode({'code': code, 'state': state})}"
 
 
 def _wait_for_redirect(server: _CallbackServer, wait_s: float) -> str:

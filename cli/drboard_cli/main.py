@@ -208,7 +208,9 @@ COMMANDS: dict[str, LazyCommand] = {
                            "shows.")),
     **_at("hosting",
           ("serve", "serve", "Host the board over HTTP with the cloud board's own API, e.g. on an "
-                             "event laptop.")),
+                             "event laptop."),
+          ("joins", "joins", "Organisers: the join code of `drboard serve` and the racers who "
+                             "joined with it.")),
 }
 
 

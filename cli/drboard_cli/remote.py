@@ -23,21 +23,16 @@ from typing import Any, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
-from drboard_functions.models import (
-    MAX_PAGE,
-    AliasRequest,
+from drboard_functions.models.domain import MAX_PAGE, Board
+from drboard_functions.models.requests import AliasRequest, BoardChanges, BoardSpec, ImportedSubmission
+from drboard_functions.models.transfer import ExportPage, ImportReceipt
+from drboard_functions.models.views import (
     AuditPage,
-    Board,
-    BoardChanges,
     BoardList,
     BoardPage,
-    BoardSpec,
     BoardView,
     Comparison,
-    ExportPage,
     HistoryItem,
-    ImportedSubmission,
-    ImportReceipt,
     Insights,
     Me,
     Moderation,
@@ -45,6 +40,7 @@ from drboard_functions.models import (
     RacerHistory,
     RacerSummary,
     RacerView,
+    RankCounters,
 )
 from drboard_functions.service import default_board_id
 from pydantic import BaseModel, ValidationError
@@ -133,6 +129,11 @@ class HttpBoard:
         answer = self._call("POST", f"/boards/{_quote(board_id)}/restore", signed=True)
         return _parse(BoardView, answer)
 
+    def rebuild_ranks(self, board_id: str, budget_s: float | None) -> RankCounters:
+        # The board decides how long one request counts.
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/rank-counters", signed=True)
+        return _parse(RankCounters, answer)
+
     def export_page(self, board_id: str, cursor: str | None) -> ExportPage:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/export", query={"cursor": cursor},
                             signed=True)
@@ -149,9 +150,11 @@ class HttpBoard:
 
     # ---- the signed-in caller, moderation and audit ---------------------------------------
 
-    def join(self, code: str) -> Joined:
-        """Join a `drboard serve` board with its join code (the answer holds a new token)."""
-        return _parse(Joined, self._call("POST", "/join", body=JoinRequest(code=code)))
+    def join(self, code: str, renewing: str | None = None) -> Joined:
+        """Join a `drboard serve` board with its join code (the answer holds a new token);
+        ``renewing``, the token a racer holds already, keeps their sign-in (and alias)."""
+        return _parse(Joined, self._call("POST", "/join", body=JoinRequest.model_construct(code=code),
+                                         token=renewing))
 
     def me(self) -> Me:
         return _parse(Me, self._call("GET", "/me", signed=True))
@@ -194,9 +197,9 @@ class HttpBoard:
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: Mapping[str, str | list[str] | None] | None = None,
-              signed: bool = False) -> Answer:
+              signed: bool = False, token: str | None = None) -> Answer:
         given = {name: value for name, value in (query or {}).items() if value}
-        token = fresh_token(self.endpoint) if signed else None
+        token = token or (fresh_token(self.endpoint) if signed else None)
         prefix = tokens.route_prefix(token) if token else ""
         url = self.endpoint + prefix + path + (
             f"?{urllib.parse.urlencode(given, doseq=True)}" if given else "")

@@ -24,13 +24,11 @@ from drboard_functions.display import (
 )
 from drboard_functions.flags import DESCRIPTIONS
 from drboard_functions.insights import LABELS, fact_text
-from drboard_functions.models import (
-    AuditEvent,
+from drboard_functions.models.domain import AuditEvent, BoardStatus, Design
+from drboard_functions.models.views import (
     BoardPage,
-    BoardStatus,
     BoardView,
     Comparison,
-    Design,
     EntryView,
     HistoryItem,
     Insights,
@@ -260,15 +258,25 @@ def receipt_line(receipt: PushReceipt) -> Text:
     return text
 
 
-def history_table(racer: str, items: Iterable[HistoryItem]) -> Table:
+def history_table(racer: str, items: Iterable[HistoryItem], width: int = 120) -> Table:
+    """The racer's submissions; on a narrow terminal the date is shorter and the best lap goes."""
+    wide = width >= 100
     table = Table(title=f"History of {racer}", header_style="bold")
-    for name in ("Submitted", "Board", "Model", "Result", "Best lap", "Laps", "Best"):
-        table.add_column(name, no_wrap=name == "Board", overflow="fold")
+    table.add_column("Submitted", no_wrap=True)
+    table.add_column("Board", no_wrap=True)
+    table.add_column("Model", no_wrap=True, overflow="ellipsis")
+    table.add_column("Result", no_wrap=True, justify="right")
+    if wide:
+        table.add_column("Best lap", no_wrap=True, justify="right")
+    table.add_column("Laps", justify="right")
+    table.add_column("Best")
     for item in items:
         result = seconds(item.time_ms) if item.qualified else f"{percent(item.best_completion_pct)}"
-        table.add_row(item.submitted_at.strftime("%Y-%m-%d %H:%M:%S"), item.board_id,
-                      item.model_name, result, seconds(item.best_lap_ms),
-                      str(item.laps_completed), "★" if item.is_best else "")
+        cells = [item.submitted_at.strftime("%Y-%m-%d %H:%M:%S" if wide else "%m-%d %H:%M"),
+                 item.board_id, item.model_name, result]
+        if wide:
+            cells.append(seconds(item.best_lap_ms))
+        table.add_row(*cells, str(item.laps_completed), "★" if item.is_best else "")
     return table
 
 
@@ -284,15 +292,78 @@ def moderation_line(moderation: Moderation, action: str) -> Text:
                 "is kept (`drboard audit " + board.board_id + "` lists who did what).")
 
 
-def audit_table(board_id: str, events: Iterable[AuditEvent]) -> Table:
+def audit_table(board_id: str, events: Iterable[AuditEvent], width: int = 120) -> Table:
+    """Who did what: each sign-in by the racer alias it pushes as (a joined racer's ``join:`` id
+    is no name), each change in words; on a narrow terminal the submission id gives way."""
+    events = list(events)
+    aliases = {event.actor: event.racer for event in events if event.action == "push" and event.racer}
+    wide = width >= 100
     table = Table(title=f"Audit trail of {board_id}", header_style="bold")
-    for name in ("When (UTC)", "Action", "Who", "Racer", "Submission", "Detail"):
-        table.add_column(name, overflow="fold")
+    table.add_column("When (UTC)", no_wrap=True)
+    table.add_column("Action", no_wrap=True)
+    table.add_column("Who")
+    table.add_column("Racer")
+    if wide:
+        table.add_column("Submission", no_wrap=True)
+    table.add_column("What", ratio=1)
     for event in events:
-        who = f"{event.actor_name} ({event.actor})" if event.actor_name else event.actor
-        table.add_row(event.at.astimezone(UTC).strftime("%Y-%m-%d %H:%M:%S"), event.action, who,
-                      event.racer or "", (event.submission_id or "")[:12], event.detail)
+        cells = [event.at.astimezone(UTC).strftime("%m-%d %H:%M:%S"), event.action,
+                 actor_label(event.actor, event.actor_name, aliases.get(event.actor)),
+                 event.racer or ""]
+        if wide:
+            cells.append((event.submission_id or "")[:12])
+        cells.append(audit_detail(event))
+        table.add_row(*cells)
     return table
+
+
+def actor_label(principal: str, name: str, alias: str | None) -> str:
+    """Who a sign-in is, for people: the organiser at the board's computer, a racer by the alias
+    they push as, an IAM caller by the last part of its ARN."""
+    kind = principal.partition(":")[0]
+    if principal == "local":
+        return "organiser (this computer)"
+    if kind == "join":
+        return f"{alias} (joined)" if alias else f"a joined racer ({principal[5:13]})"
+    if kind == "iam":
+        return f"organiser (IAM {principal.rsplit('/', 1)[-1]})"
+    shown = name or alias or principal
+    return f"{shown} (as {alias})" if alias and alias != shown else shown
+
+
+#: How the board's settings read in an audit line ("title", "closes at", ...).
+_SETTING_NAMES = {"cooldown_s": "cooldown", "max_submissions": "max submissions",
+                  "min_laps": "min laps", "opens_at": "opens at", "closes_at": "closes at",
+                  "flagged_runs": "flagged runs"}
+
+
+def audit_detail(event: AuditEvent) -> str:
+    """An event's detail in words: a board's changes as ``title → Club final; cooldown →
+    30 min``, a push's model, a creation's title."""
+    if event.action == "update":
+        try:
+            changes = json.loads(event.detail)
+        except ValueError:
+            changes = None
+        if isinstance(changes, dict):
+            return "; ".join(f"{_SETTING_NAMES.get(name, name.replace('_', ' '))} → "
+                             f"{_setting_text(name, value)}" for name, value in changes.items())
+    if event.action == "push" and event.detail:
+        return f"model {event.detail}"
+    return event.detail
+
+
+def _setting_text(name: str, value: Any) -> str:
+    if value is None:
+        return "none"
+    if name == "cooldown_s" and isinstance(value, int):
+        return duration(value) if value else "none"
+    if name in ("opens_at", "closes_at") and isinstance(value, str):
+        try:
+            return when(datetime.fromisoformat(value))
+        except ValueError:
+            return value
+    return str(value)
 
 
 def me_line(me: Me) -> Text:
@@ -301,26 +372,34 @@ def me_line(me: Me) -> Text:
     return Text(f"Signed in as {me.name or me.principal} ({me.principal}), {role}; {alias}.")
 
 
-def status_table(summary: RacerSummary) -> Table:
-    """Per board: the racer's latest submission, where their best stands, what they have left."""
+def status_table(summary: RacerSummary, width: int = 120) -> Table:
+    """Per board: the racer's latest submission, where their best stands, what they have left.
+    On a narrow terminal the gap goes under the rank, and no word is cut."""
+    wide = width >= 100
     table = Table(title=Text(f"Status of {summary.racer}"), header_style="bold")
     table.add_column("Board", no_wrap=True)
-    for name in ("Latest", "Result", "Rank", "Gap", "Used", "Next"):
-        table.add_column(name, overflow="fold")
+    table.add_column("Latest", no_wrap=True, overflow="ellipsis", max_width=24)
+    table.add_column("Result")
+    table.add_column("Rank", no_wrap=True)
+    if wide:
+        table.add_column("Gap", no_wrap=True)
+    table.add_column("Used", no_wrap=True)
+    table.add_column("Next")
     for status in summary.boards:
         latest = status.latest
-        result = _result(latest)
+        result = _result(latest).replace(" s", "\u00a0s")  # a time and its unit stay together
         if not latest.is_best:
             result += f" (best {_time_label(status.entry)})"
-        table.add_row(
+        rank = f"{status.entry.rank} of {status.board.participants}"
+        cells: list[Text | str] = [
             _board_label(status.board),
-            Text(f"{latest.submitted_at:%b %d %H:%M}\n{latest.model_name}"),
+            Text(f"{latest.submitted_at:%b %d %H:%M}\n{latest.model_name}", no_wrap=True,
+                 overflow="ellipsis"),
             result,
-            f"{status.entry.rank} of {status.board.participants}",
-            gap(status.entry.gap_ms),
-            _submissions_label(status),
-            next_submission(status),
-        )
+        ]
+        cells += [rank, gap(status.entry.gap_ms)] if wide else [f"{rank}\n{gap(status.entry.gap_ms)}"]
+        cells += [_submissions_label(status), next_submission(status)]
+        table.add_row(*cells)
     return table
 
 

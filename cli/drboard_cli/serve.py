@@ -15,9 +15,17 @@ the cloud board's pages poll with ``If-None-Match`` instead): an ``event: board`
 board's page tag each time the standings, the settings or the status change, ``missing`` while
 no board has that id yet.
 
-Racers on the network sign in with the join code `serve` prints (``POST /join``, answered here
-and not by the routes): each gets a token of their own, sent as a bearer token, which this server
-turns into the caller of the request (see :mod:`drboard_cli.joins`). Unsigned pushes are refused.
+Racers on the network sign in with the join code `serve` prints and the big screen shows
+(``POST /join``, answered here and not by the routes; ``GET /join?code=…``, where the screen's QR
+code leads, is a page saying the command): each gets a token of their own, sent as a bearer
+token, which this server turns into the caller of the request (see :mod:`drboard_cli.joins`).
+Unsigned pushes are refused. The pages are told the board's network address and the code
+(:class:`drboard_functions.web.Invite`), so a screen opened as ``localhost`` on the serving
+laptop still shows what the racers' laptops must type.
+
+The log says what happened for people: who pushed which model, its time and rank, who joined,
+what the organiser changed, and every refusal; the pages' polls are left out (``log_requests``
+adds a plain line per request).
 
 The HTTP side is uvicorn (h11): keep-alive without Nagle's delay, a listen backlog, idle
 connections let go (also one that connects and never finishes a request), graceful shutdown.
@@ -45,21 +53,29 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, unquote, urlsplit
 
 import uvicorn
-from drboard_functions.errors import BoardNotFound, DomainError, InvalidQuery, NotAuthorized
+from drboard_functions.errors import (
+    BoardNotFound,
+    DomainError,
+    InvalidQuery,
+    NotAuthorized,
+    TooSoon,
+)
 from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
 from drboard_functions.service import LeaderboardService
 from pydantic import ValidationError
 from rich.console import Console
 from uvicorn.protocols.http.h11_impl import H11Protocol
 
-from .joins import JoinDesk, JoinRequest, WrongCode
+from .joins import JoinDesk, JoinRequest, TooManyJoins, WrongCode
 
 if TYPE_CHECKING:
     from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
+    from drboard_functions.web import Invite
 
 MAX_BODY_BYTES = 1024 * 1024  # the routes apply the record's own, smaller bound
 STREAM_POLL_S = 0.5  # how often an event stream looks at its board (one small SQLite read)
-STREAM_KEEPALIVE_S = 15.0
+#: A stream pings this often, so a page notices a lost server within a few seconds.
+STREAM_KEEPALIVE_S = 2.0
 #: An idle keep-alive connection (a browser between two polls), or one that does not finish sending
 #: a request, is closed after this long; stopping the server never waits on a client for long.
 IDLE_CONNECTION_S = 5.0
@@ -69,6 +85,7 @@ RESOLVER_THREADS = 8
 MAX_CONNECTIONS = 1000  # open connections and requests in flight; more are answered 503
 SHUTDOWN_GRACE_S = 30.0  # how long stopping waits for requests in flight
 _EVENTS_PATH = re.compile(r"^/boards/([^/]+)/events$")
+_PUSH_PATH = re.compile(r"^/boards/([^/]+)/submissions$")
 
 _log = Console(stderr=True, highlight=False)
 
@@ -166,11 +183,12 @@ class BoardServer:
     (or :meth:`shutdown` from another thread), then :meth:`server_close` lets go of everything."""
 
     def __init__(self, address: tuple[str, int], service: LeaderboardService,
-                 desk: JoinDesk | None = None) -> None:
+                 desk: JoinDesk | None = None, *, log_requests: bool = False) -> None:
         from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
 
         self.service = service
         self.desk = desk
+        self.log_requests = log_requests
         self.sign_in = SignIn(kind="join-code" if desk else "none")
         # Powertools keeps the request being resolved in the resolver (the resolver instance, as
         # read below, and a class-wide slot it also writes): each request in flight takes a pair
@@ -186,6 +204,9 @@ class BoardServer:
         self.open_streams = 0
         self.socket = _listening_socket(address)
         self.server_address: tuple[str, int] = self.socket.getsockname()[:2]
+        #: The address racers reach the board at (the network's, not 0.0.0.0 or localhost);
+        #: `drboard serve` sets it once it knows the port.
+        self.public_url = f"http://{reachable_host(str(self.server_address[0]))}:{self.server_address[1]}"
         self.server = uvicorn.Server(uvicorn.Config(
             self, http=_TimedH11Protocol, loop="asyncio", lifespan="off", ws="none",
             proxy_headers=False,  # the peer's own address decides who is local, never a header
@@ -233,8 +254,8 @@ class BoardServer:
         event = canonical_event(event)
         http = event["requestContext"]["http"]
         local = is_loopback(http["sourceIp"])
-        if http["method"] == "POST" and event["rawPath"] == "/join":
-            return self._join(event.get("body") or "")
+        if event["rawPath"] == "/join" and http["method"] in ("GET", "POST"):
+            return self._join(event) if http["method"] == "POST" else self._join_page(event)
         if not local and self.organiser_routes.matches(http["method"], event["rawPath"]):
             return _refused(NotAuthorized(
                 "organiser requests are answered only on the computer running `drboard serve`; "
@@ -245,31 +266,87 @@ class BoardServer:
             event["requestContext"]["authorizer"] = {"lambda": caller.model_dump()}
         resolvers = self.resolvers.get()
         try:
-            return _resolve(resolvers.local if local else resolvers.public, event, self.service,
-                            self.sign_in)
+            result = _resolve(resolvers.local if local else resolvers.public, event, self.service,
+                              self.sign_in, self.invite)
         finally:
             self.resolvers.put(resolvers)
+        self._note(event, result, caller)
+        return result
+
+    def invite(self) -> Invite:
+        """What the pages tell racers: this board's network address and its join code."""
+        from drboard_functions.web import Invite
+
+        return Invite(endpoint=self.public_url,
+                      code=self.desk.current_code().code if self.desk else None)
 
     def _racer(self, headers: dict[str, str]) -> Caller | None:
         """The racer a request's bearer token signs in, or None."""
-        scheme, _, token = headers.get("authorization", "").partition(" ")
-        if self.desk is None or scheme.lower() != "bearer" or not token.strip():
-            return None
-        return self.desk.caller(token.strip())
+        token = _bearer(headers)
+        return self.desk.caller(token) if self.desk is not None and token else None
 
-    def _join(self, body: str) -> dict[str, Any]:
+    def _join(self, event: dict[str, Any]) -> dict[str, Any]:
+        http = event["requestContext"]["http"]
         if self.desk is None:
             return _refused(NotAuthorized("this board takes no join codes"))
         try:
-            request = JoinRequest.model_validate_json(body)
+            request = JoinRequest.model_validate_json(event.get("body") or "")
         except ValidationError:
-            return _refused(InvalidQuery('send {"code": "<the join code>"} as JSON'))
+            return _refused(InvalidQuery('send {"code": "<the join code>"} as JSON; a join code '
+                                         "is letters and digits, e.g. K7QM-3XWD"))
         try:
-            joined = self.desk.join(request.code)
+            joined = self.desk.join(request.code, client=http["sourceIp"],
+                                    renewing=_bearer(event["headers"]))
         except WrongCode as wrong:
+            self.say(f"a join from {http['sourceIp']} was refused: {wrong}")
             return _refused(NotAuthorized(str(wrong)))
+        except TooManyJoins as many:
+            self.say(f"joins from {http['sourceIp']} are held back: {many}")
+            return _refused(TooSoon(str(many), many.retry_after_s))
+        code = self.desk.current_code()
+        self.say(f"a racer {'renewed their join' if joined.renewed else 'joined'} from "
+                 f"{http['sourceIp']} ({joined.principal}; the code has joined {code.joins} of "
+                 f"{code.max_joins})")
         return {"statusCode": 201, "headers": {"Content-Type": "application/json"},
                 "body": joined.model_dump_json(), "isBase64Encoded": False}
+
+    def _join_page(self, event: dict[str, Any]) -> dict[str, Any]:
+        from drboard_functions.routes.responses import PAGE_HEADERS, page_policy
+        from drboard_functions.web import join_page
+
+        return {"statusCode": 200, "isBase64Encoded": False,
+                "headers": PAGE_HEADERS | page_policy() | {"Content-Type": "text/html; charset=utf-8"},
+                "body": join_page(self.invite(), self.service.boards())}
+
+    # ---- the log --------------------------------------------------------------------------------
+
+    def say(self, line: str) -> None:
+        _log_event(f"{time.strftime('%H:%M:%S')}  {line}")
+
+    def _note(self, event: dict[str, Any], result: dict[str, Any], caller: Caller | None) -> None:
+        """Log what a request did, for people; remember the alias a joined racer pushes as."""
+        http = event["requestContext"]["http"]
+        method, path, status = http["method"], event["rawPath"], int(result.get("statusCode", 200))
+        who = _who(caller, http["sourceIp"])
+        body = result.get("body") or ""
+        pushed = method == "POST" and _PUSH_PATH.match(path)
+        if pushed and status in (200, 201):
+            from drboard_functions.models.views import PushReceipt
+
+            receipt = PushReceipt.model_validate_json(body)
+            if caller is not None and self.desk is not None and caller.principal.startswith("join:"):
+                self.desk.note_alias(caller.principal, receipt.entry.racer)
+            self.say(_push_line(receipt) + ("" if caller is None or caller.principal == "local"
+                                            else f"  [{http['sourceIp']}, {caller.principal}]"))
+        elif method == "PUT" and path == "/me/alias" and status == 200:
+            alias = json.loads(body).get("alias")
+            if alias and caller is not None and self.desk is not None:
+                self.desk.note_alias(caller.principal, str(alias))
+            self.say(f"{who} holds the alias {alias}")
+        elif status >= 400 and (method != "GET" or status >= 500):
+            self.say(f"{method} {unquote(path)} by {who}: refused, {status} {_error_text(body)}")
+        elif method not in ("GET", "HEAD", "OPTIONS") and status < 300:
+            self.say(f"{who}: {method} {unquote(path)} done ({status})")
 
     # ---- ASGI -----------------------------------------------------------------------------------
 
@@ -282,8 +359,10 @@ class BoardServer:
             status = await self._stream(unquote(events[1]), receive, send)
         else:
             status = await self._answer(scope, path, receive, send)
-        query = scope["query_string"].decode("latin-1")
-        _log_request(f'{_client_ip(scope)} "{scope["method"]} {path}{"?" * bool(query)}{query}" {status}')
+        if self.log_requests:
+            query = scope["query_string"].decode("latin-1")
+            _log_request(f'{_client_ip(scope)} "{scope["method"]} {path}{"?" * bool(query)}{query}" '
+                         f"{status}")
 
     async def _answer(self, scope: Scope, path: str, receive: Receive, send: Send) -> int:
         try:
@@ -330,7 +409,7 @@ class BoardServer:
                 await _more(send, f"event: board\ndata: {tag}\n\n".encode())
                 sent, quiet = tag, 0.0
             elif quiet >= STREAM_KEEPALIVE_S:
-                await _more(send, b": keep-alive\n\n")
+                await _more(send, b"event: ping\ndata: \n\n")
                 quiet = 0.0
             await asyncio.wait([gone], timeout=STREAM_POLL_S)
             quiet += STREAM_POLL_S
@@ -343,13 +422,13 @@ class _Resolvers:
 
 
 def _resolve(app: APIGatewayHttpResolver, event: dict[str, Any], service: LeaderboardService,
-             sign_in: SignIn) -> dict[str, Any]:
+             sign_in: SignIn, invite: Callable[[], Invite]) -> dict[str, Any]:
     # Every read of the request goes through the resolver instance: setting it there (before
     # resolve also writes the class-wide slot) keeps each resolver on its own request.
     context = LocalContext(aws_request_id=event["requestContext"]["requestId"])
     app.current_event = app._to_proxy_event(event)  # type: ignore[assignment]
     app.lambda_context = context  # type: ignore[assignment]
-    app.append_context(service=service, sign_in=sign_in)
+    app.append_context(service=service, sign_in=sign_in, invite=invite)
     return app.resolve(event, context)  # type: ignore[arg-type]
 
 
@@ -399,6 +478,65 @@ class _TimedH11Protocol(H11Protocol):
         if self.timeout_keep_alive_task is None and not self.transport.is_closing():
             self.timeout_keep_alive_task = self.loop.call_at(self._head_due,
                                                              self.timeout_keep_alive_handler)
+
+
+def _bearer(headers: dict[str, str]) -> str | None:
+    scheme, _, token = headers.get("authorization", "").partition(" ")
+    return token.strip() if scheme.lower() == "bearer" and token.strip() else None
+
+
+def _push_line(receipt: Any) -> str:
+    """``Ada pushed ada-v7 to club-final: 9.120 s, rank 2 of 12, new best (+0.465 s)``."""
+    from drboard_functions.display import gap, percent, seconds
+
+    pushed = receipt.submission
+    result = (seconds(pushed.time_ms) if pushed.qualified
+              else f"{percent(pushed.best_completion_pct)} done, not qualified")
+    outcome = ("already on the board" if receipt.status == "duplicate"
+               else "new best" if receipt.improved else "not better than their best")
+    if receipt.rank > 1 and receipt.entry.gap_ms is not None:
+        outcome += f", {gap(receipt.entry.gap_ms)} to the leader"
+    return (f"{receipt.entry.racer} pushed {pushed.model_name} to {receipt.board_id}: {result}, "
+            f"rank {receipt.rank} of {receipt.participants}, {outcome}")
+
+
+def _who(caller: Caller | None, address: str) -> str:
+    if caller is None:
+        return f"an unsigned client at {address}"
+    if caller.principal == LOCAL_ORGANISER.principal:
+        return "the organiser (this computer)"
+    return f"{caller.name or 'a racer'} at {address}, {caller.principal}"
+
+
+def _error_text(body: str) -> str:
+    try:
+        answer = json.loads(body)
+    except ValueError:
+        return ""
+    if not isinstance(answer, dict):
+        return ""
+    return f"{answer.get('error', '')}: {answer.get('message', '')}".strip(": ")
+
+
+def _log_event(line: str) -> None:
+    if _log.is_terminal:
+        _log.out(line, highlight=False)
+    else:
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+
+def reachable_host(host: str) -> str:
+    """The address racers reach this computer at: for 0.0.0.0 (or ::), its own on the network;
+    an IPv6 address in brackets, as a URL wants it."""
+    if host not in ("0.0.0.0", "::"):
+        return f"[{host}]" if ":" in host else host
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("10.254.254.254", 1))  # no packet is sent: this only picks a route
+            return str(probe.getsockname()[0])
+        except OSError:
+            return socket.gethostname()
 
 
 def _log_request(line: str) -> None:

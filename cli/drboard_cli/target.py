@@ -9,24 +9,22 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` imports no model
     from drboard_assembler.record import Record
-    from drboard_functions.models import (
+    from drboard_functions.models.domain import Board
+    from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
+    from drboard_functions.models.transfer import ExportPage, ImportReceipt
+    from drboard_functions.models.views import (
         AuditPage,
-        Board,
-        BoardChanges,
         BoardPage,
-        BoardSpec,
         BoardView,
         Comparison,
-        ExportPage,
         HistoryItem,
-        ImportedSubmission,
-        ImportReceipt,
         Insights,
         Me,
         Moderation,
         PushReceipt,
         RacerSummary,
         RacerView,
+        RankCounters,
     )
 
 
@@ -49,6 +47,7 @@ class BoardClient(Protocol):
     def close_board(self, board_id: str) -> BoardView: ...
     def delete_board(self, board_id: str) -> BoardView: ...
     def restore_board(self, board_id: str) -> BoardView: ...
+    def rebuild_ranks(self, board_id: str, budget_s: float | None) -> RankCounters: ...
     def export_page(self, board_id: str, cursor: str | None) -> ExportPage: ...
     def import_board(self, board: Board) -> tuple[BoardView, bool]: ...
     def import_submission(self, board_id: str, item: ImportedSubmission) -> ImportReceipt: ...

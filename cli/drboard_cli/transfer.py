@@ -27,17 +27,10 @@ from typing import IO
 
 from drboard_assembler.errors import field_path
 from drboard_assembler.record import RaceType
-from drboard_functions.models import (
-    BOARD_ID_PATTERN,
-    Board,
-    BoardView,
-    ExportedBoard,
-    ExportedEntry,
-    ExportedSubmission,
-    ExportLine,
-    ImportedSubmission,
-    run_mismatches,
-)
+from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, run_mismatches
+from drboard_functions.models.requests import ImportedSubmission
+from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission, ExportLine
+from drboard_functions.models.views import BoardView
 from pydantic import TypeAdapter, ValidationError
 
 from .target import BoardClient

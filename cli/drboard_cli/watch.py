@@ -27,7 +27,7 @@ from pathlib import Path
 
 from drboard_assembler import AssemblyError, Overrides, Record, assemble, evaluation_files, planned_trials
 from drboard_functions import errors as domain
-from drboard_functions.models import PushReceipt
+from drboard_functions.models.views import PushReceipt
 from rich.console import Console
 from rich.status import Status
 from rich.text import Text

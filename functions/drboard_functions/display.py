@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from datetime import UTC, datetime
 
-from .models import BoardView, Design, TimingMethod
+from .models.domain import Design, TimingMethod
+from .models.views import BoardView
 
 DASH = "—"
 _ALGORITHMS = {"clipped_ppo": "PPO", "sac": "SAC"}

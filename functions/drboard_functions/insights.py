@@ -11,7 +11,7 @@ from typing import Any
 from drboard_assembler.record import Record
 
 from .display import algorithm_name
-from .models import DesignFacts, SharedFact
+from .models.views import DesignFacts, SharedFact
 
 #: The facts insights summarise, with how people read them (in this order).
 LABELS = {
@@ -66,6 +66,24 @@ def differences(facts: Sequence[DesignFacts]) -> list[str]:
     """The facts on which the designs do not all agree, in LABELS order."""
     dumped = [f.model_dump() for f in facts]
     return [name for name in LABELS if len({_key(d[name]) for d in dumped}) > 1]
+
+
+#: What an algorithm fixes by itself, whatever its racer chose: DeepRacer's SAC trains only a
+#: continuous action space (so no count of actions), and has neither PPO's entropy coefficient
+#: nor its epochs among its hyperparameters.
+FIXED_BY_ALGORITHM: dict[str, dict[str, Any]] = {
+    "sac": {"action_space": "continuous", "actions": None, "entropy": None, "epochs": None},
+}
+
+
+def algorithm_differences(facts: Sequence[DesignFacts], differing: Sequence[str]) -> list[str]:
+    """Of the facts the designs differ on, those that follow from their algorithms alone: the
+    algorithms differ, and a design holds the value its algorithm fixes."""
+    if len({f.algorithm for f in facts}) < 2:
+        return []
+    return [name for name in differing
+            if any(name in (fixed := FIXED_BY_ALGORITHM.get(f.algorithm, {}))
+                   and getattr(f, name) == fixed[name] for f in facts)]
 
 
 def shared_facts(top: Sequence[DesignFacts], field: Sequence[DesignFacts]) -> list[SharedFact]:

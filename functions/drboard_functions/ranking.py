@@ -13,7 +13,7 @@ from datetime import UTC, datetime
 from drboard_assembler.record import EvaluationRun, Record
 
 from .flags import run_flags
-from .models import BoardRules, Score, TimingMethod
+from .models.domain import BoardRules, Score, TimingMethod
 
 _TIME_DIGITS = 12
 

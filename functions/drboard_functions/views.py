@@ -7,7 +7,8 @@ from datetime import datetime
 from drboard_assembler.catalog import default_catalog
 from drboard_assembler.record import Record
 
-from .models import BoardView, Design, Entry, EntryView, HistoryItem, Submission
+from .models.domain import Design, Entry, Submission
+from .models.views import BoardView, EntryView, HistoryItem
 from .stores.base import StoredBoard
 
 

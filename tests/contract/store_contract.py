@@ -20,7 +20,7 @@ from datetime import UTC, datetime, timedelta
 
 import pytest
 from drboard_assembler.record import Record
-from drboard_functions.models import (
+from drboard_functions.models.domain import (
     AliasClaim,
     AuditEvent,
     Board,

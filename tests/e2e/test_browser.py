@@ -8,6 +8,7 @@ both).
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
@@ -79,10 +80,49 @@ def test_a_push_updates_the_open_page_in_place_and_marks_the_row(served: Served,
     expect(page.locator("tr[data-racer]")).to_have_count(len(RUNS), timeout=10_000)
     assert page.evaluate("window.stillTheSamePage") is True, "updated in place, not reloaded"
     shown = racers(page)
-    assert page.locator("tr.fresh").count() == len(RUNS) - 1
+    assert page.locator("tr.fresh, tr.leader").count() == len(RUNS) - 1
+    assert page.locator("tr.fresh td.move").first.inner_text() == "new"
     if shown[0] != first[0]:
         assert "leader" in (page.locator("tr[data-racer]").first.get_attribute("class") or "")
     shot(page, "live-board-1920x1080")
+
+
+def test_a_new_leader_gets_a_banner_and_its_rank_movement(served: Served, new_page: Any) -> None:
+    from tests.recordkit import make_record
+
+    for n in range(20):
+        served.post(f"/boards/{BOARD}/submissions",
+                    make_record(f"Racer {n:02d}", [(9000 + 37 * n, 100)]).model_dump_json().encode())
+    page = new_page(1920, 1080)
+    page.goto(f"{served.url}/boards/{BOARD}/view?screen=1")
+    expect(page.locator("#live")).to_contain_text("Live")
+    page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+    served.post(f"/boards/{BOARD}/submissions",
+                make_record("Racer 19", [(8655, 100)]).model_dump_json().encode())
+    banner = page.locator("#leader-banner")
+    expect(banner).to_have_text("New leader — Racer 19 8.655 s", timeout=5000)
+    leader = page.locator("tr[data-racer='Racer 19']")
+    expect(leader).to_have_class(re.compile("leader"))
+    assert leader.locator("td.move").inner_text() == "▲19"
+    box = leader.bounding_box()
+    assert box is not None and box["y"] >= 0 and box["y"] + box["height"] <= 1080, "in view"
+    shot(page, "new-leader-1920x1080")
+    page.wait_for_timeout(3000)
+    expect(banner).to_be_visible()  # the room has several seconds to read it
+
+
+def test_a_lost_connection_is_shown_within_5_seconds_and_its_return(served: Served,
+                                                                    new_page: Any) -> None:
+    served.drboard("push", RUNS[0])
+    page = new_page(1920, 1080)
+    page.goto(f"{served.url}/boards/{BOARD}/view?screen=1")
+    expect(page.locator("#live")).to_contain_text("Live")
+    page.wait_for_timeout(2500)  # the stream is up
+    served.stop()
+    lost = page.locator("#connection")
+    expect(lost).to_contain_text("Connection lost", timeout=5000)
+    assert "lost" in (lost.get_attribute("class") or "")
+    shot(page, "connection-lost-1920x1080")
 
 
 def test_a_page_opened_before_the_first_push_shows_the_board_once_it_exists(
@@ -125,20 +165,58 @@ def test_the_big_screen_fills_the_room_without_wrapped_numbers(served: Served, n
     assert wrapped == []
     font = page.eval_on_selector("td.num", "cell => parseFloat(getComputedStyle(cell).fontSize)")
     assert font >= width / 100, f"{font}px text on a {width}px screen"
+    smallest = page.evaluate("""Math.min(...[...document.querySelectorAll('main *')]
+        .filter((el) => el.getClientRects().length && el.textContent.trim())
+        .map((el) => parseFloat(getComputedStyle(el).fontSize)))""")
+    assert smallest >= height / 100, f"{smallest}px text on a {height}px-high screen: every text scales"
+    expect(page.locator("p.join strong")).to_be_visible()
+    tall = page.eval_on_selector_all("tr[data-racer]", """rows => rows.filter((row) =>
+        row.getBoundingClientRect().height > 2.2 * parseFloat(getComputedStyle(row).fontSize))
+        .map((row) => [row.dataset.racer, row.getBoundingClientRect().height])""")
+    assert tall == [], "one line a racer"
     table = page.eval_on_selector("table", "t => t.getBoundingClientRect().width")
     assert table >= 0.9 * width
     assert page.evaluate("document.documentElement.scrollWidth") <= width
     shot(page, f"big-screen-{width}x{height}")
 
 
-def test_the_phone_sees_the_board_without_sideways_scrolling(served: Served, new_page: Any) -> None:
+def test_fifteen_racers_or_more_fit_the_1080p_screen(served: Served, new_page: Any) -> None:
+    from tests.recordkit import make_record
+
+    for n in range(30):
+        served.post(f"/boards/{BOARD}/submissions", make_record(
+            f"Racer {n:02d}", [(9000 + 37 * n, 100)], model=f"model-{n}").model_dump_json().encode())
+    page = new_page(1920, 1080)
+    page.goto(f"{served.url}/boards/{BOARD}/view?screen=1")
+    expect(page.locator("tr[data-racer]")).to_have_count(30)
+    seen = page.eval_on_selector_all("tr[data-racer]", """rows => rows.filter((row) => {
+        const box = row.getBoundingClientRect();
+        return box.top >= 0 && box.bottom <= innerHeight; }).length""")
+    assert seen >= 15
+    shot(page, "big-screen-30-racers-1920x1080")
+
+
+PHONE_PAGES = [f"/boards/{BOARD}/view", f"/boards/{BOARD}/racers/Blaze/view",
+               f"/boards/{BOARD}/compare/view?racer=Blaze&racer=Indy",
+               f"/boards/{BOARD}/insights/view", "/", "/boards/nowhere/view",
+               f"/boards/{BOARD}/racers/Nobody/view"]
+
+
+@pytest.mark.parametrize("path", PHONE_PAGES)
+def test_every_page_fits_a_phone_with_44_px_targets(served: Served, new_page: Any, path: str) -> None:
     served.drboard("push", *RUNS)
     push_long_name(served)
     page = new_page(390, 844)
-    page.goto(f"{served.url}/boards/{BOARD}/view")
-    expect(page.locator("tr[data-racer]")).to_have_count(len(RUNS) + 1)
+    page.goto(served.url + path)
+    page.wait_for_timeout(300)
     assert page.evaluate("document.documentElement.scrollWidth") <= 390
-    shot(page, "board-390x844")
+    small = page.eval_on_selector_all("a, button, summary", """targets => targets
+        .map((el) => [el.textContent.trim(), el.getBoundingClientRect()])
+        .filter(([, box]) => box.width > 0 && (box.height < 44 || box.width < 44))
+        .map(([text, box]) => `${text}: ${Math.round(box.width)}x${Math.round(box.height)}`)""")
+    assert small == []
+    name = path.strip("/").replace("/", "-").split("?")[0] or "index"
+    shot(page, f"phone-{name}-390x844")
 
 
 def test_the_racer_page_draws_the_laps_and_the_action_space(served: Served, new_page: Any) -> None:

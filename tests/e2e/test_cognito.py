@@ -29,6 +29,7 @@ from drboard_cli import login as signing_in
 from drboard_cli import tokens
 from drboard_cli.main import cli
 from drboard_cli.serve import LocalContext, http_event
+from drboard_functions import errors
 from drboard_functions.identity import SignIn
 from drboard_functions.routes import admin_router, build_app, canonical_event, pull_router, push_router
 from drboard_functions.service import LeaderboardService
@@ -349,3 +350,36 @@ def test_browser_sign_in_uses_pkce_and_a_loopback_redirect() -> None:
     assert hosted.verified, "the token endpoint got the verifier of the challenge"
     assert token.username == "ada" and token.refresh_token == "refresh"
     assert tokens.load("https://board.example") == token
+
+
+@pytest.mark.parametrize("paste", ["address", "code"])
+def test_a_headless_machine_signs_in_with_what_the_browser_shows(paste: str) -> None:
+    """`drboard login --no-browser`: nothing listens on the headless machine; the racer signs in
+    on another device and pastes back the address it ended on (or just its code)."""
+    hosted = HostedSignIn(_unsigned_jwt({"username": "ada", "token_use": "access"}))
+    threading.Thread(target=hosted.serve_forever, daemon=True).start()
+    settings = SignIn(kind="cognito", region=REGION, user_pool_id="eu-west-1_x", client_id="cli",
+                      domain=f"http://127.0.0.1:{hosted.server_address[1]}", scopes=["openid"])
+    shown: list[str] = []
+
+    def pasted() -> str:
+        query = parse_qs(urlsplit(shown[0]).query)
+        hosted.challenge = query["code_challenge"][0]
+        address = f"{signing_in.REDIRECT_URI}?code=the-code&state={query['state'][0]}"
+        return f"  {address}\n" if paste == "address" else "the-code"
+
+    try:
+        token = signing_in.login_with_pasted_code("https://board.example", settings, shown.append,
+                                                  pasted)
+    finally:
+        hosted.shutdown()
+        hosted.server_close()
+    assert hosted.verified and token.username == "ada"
+    assert tokens.load("https://board.example") == token
+
+
+def test_a_pasted_address_of_another_sign_in_is_refused() -> None:
+    with pytest.raises(errors.NotAuthorized, match="another sign-in"):
+        signing_in.pasted_redirect(f"{signing_in.REDIRECT_URI}?code=c&state=other", "mine")
+    with pytest.raises(errors.NotSignedIn):
+        signing_in.pasted_redirect("   ", "mine")

@@ -23,14 +23,8 @@ from drboard_cli import tokens
 from drboard_cli.remote import HttpBoard
 from drboard_cli.serve import BoardServer, http_event
 from drboard_functions import errors
-from drboard_functions.models import (
-    BoardChanges,
-    BoardSpec,
-    ExportedBoard,
-    ExportedSubmission,
-    ExportLine,
-    ImportedSubmission,
-)
+from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from drboard_functions.models.transfer import ExportedBoard, ExportedSubmission, ExportLine
 
 from tests.integration.dynamodb_local import DynamoDbLocal
 from tests.recordkit import make_record
@@ -285,8 +279,13 @@ def test_organiser_routes_answer_only_the_serving_computer(tmp_path: Path) -> No
         with pytest.raises(errors.NotSignedIn):
             from_the_lan.push(make_record("Ada"), "club-night")
         assert served.process.stdout is not None
-        code = re.search(r"join with code (\S+)", served.process.stdout.readline())
-        assert code, "serve prints the join code"
+        printed = ""
+        while "drboard join" not in printed:
+            printed = served.process.stdout.readline()
+            assert printed, "serve prints the join command"
+        code = re.search(r"drboard join (\S+) --endpoint (\S+)", printed)
+        assert code, "serve prints the join command as racers type it"
+        assert "0.0.0.0" not in code.group(2) and code.group(2) == served.url, "its network address"
         joined = from_the_lan.join(code.group(1))
         tokens.save(from_the_lan.endpoint, tokens.SavedToken(kind="join", access_token=joined.token))
         assert from_the_lan.push(make_record("Ada"), "club-night").status == "created"  # racers may

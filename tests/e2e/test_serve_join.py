@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 from drboard_cli import tokens
-from drboard_cli.joins import JoinDesk
+from drboard_cli.joins import ATTEMPTS_PER_WINDOW, JoinDesk, WrongCode
 from drboard_cli.serve import BoardServer, http_event
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
@@ -38,7 +38,7 @@ def clock() -> Clock:
 @pytest.fixture
 def server(tmp_path: Path, clock: Clock) -> Iterator[BoardServer]:
     store = SqliteStore(":memory:")
-    desk = JoinDesk(tmp_path / "board.joined.sqlite", code_minutes=30, clock=clock)
+    desk = JoinDesk(tmp_path / "board.joined.sqlite", token_hours=12, clock=clock)
     server = BoardServer(("127.0.0.1", 0), LeaderboardService(store), desk)
     yield server
     server.server_close()
@@ -96,15 +96,112 @@ def test_a_copied_run_from_another_racer_is_409(server: BoardServer) -> None:
     assert (status, answer["error"]) == (409, "CopiedRun")
 
 
-def test_a_wrong_or_expired_code_joins_no_one(server: BoardServer, clock: Clock) -> None:
+def test_a_wrong_code_joins_no_one_and_a_code_lasts_until_rotated(server: BoardServer,
+                                                                  clock: Clock) -> None:
     assert server.desk is not None
     code = server.desk.current_code().code
     assert call(server, "POST", "/join", {"code": "AAAA-AAAA"})[0] == 403
-    clock.now += timedelta(minutes=31)
+    clock.now += timedelta(hours=20)
+    assert server.desk.current_code().code == code, "the code is the night's"
+    assert call(server, "POST", "/join", {"code": code})[0] == 201
+    rotated = server.desk.rotate().code
+    assert rotated != code
     status, answer = call(server, "POST", "/join", {"code": code})
     assert (status, answer["error"]) == (403, "NotAuthorized")
-    assert server.desk.current_code().code != code, "a new code replaces the one that ran out"
+    assert call(server, "POST", "/join", {"code": rotated})[0] == 201
     assert call(server, "POST", "/join", {"nope": 1})[0] == 400
+
+
+@pytest.mark.parametrize("code", ["ÄÄÄÄ-ÄÄÄÄ", "K7QM-3XWD\u202e", "日本語", "x" * 40])
+def test_a_code_that_is_not_letters_and_digits_is_a_clean_400(server: BoardServer, code: str) -> None:
+    status, answer = call(server, "POST", "/join", {"code": code})
+    assert (status, answer["error"]) == (400, "InvalidQuery")
+
+
+def test_the_code_survives_a_restart_of_serve(tmp_path: Path, clock: Clock) -> None:
+    first = JoinDesk(tmp_path / "joined.sqlite", clock=clock)
+    code = first.current_code().code
+    first.close()
+    again = JoinDesk(tmp_path / "joined.sqlite", clock=clock)
+    try:
+        assert again.current_code().code == code
+        assert again.join(code.lower().replace("-", " ")).principal.startswith("join:")
+    finally:
+        again.close()
+
+
+def test_a_code_joins_at_most_its_cap(tmp_path: Path, clock: Clock) -> None:
+    desk = JoinDesk(tmp_path / "joined.sqlite", max_joins=2, clock=clock)
+    code = desk.current_code().code
+    try:
+        desk.join(code, client="10.0.0.1")
+        desk.join(code, client="10.0.0.2")
+        with pytest.raises(WrongCode, match="rotate"):
+            desk.join(code, client="10.0.0.3")
+        assert desk.join(desk.rotate().code, client="10.0.0.3")
+    finally:
+        desk.close()
+
+
+def test_joins_are_rate_limited_per_client(server: BoardServer) -> None:
+    assert server.desk is not None
+    answers = [call(server, "POST", "/join", {"code": "WRONG-CODE"}, address="10.0.0.9")
+               for _ in range(ATTEMPTS_PER_WINDOW + 1)]
+    assert [status for status, _ in answers[:-1]] == [403] * ATTEMPTS_PER_WINDOW
+    assert answers[-1][0] == 429 and answers[-1][1]["error"] == "TooSoon"
+    result = server.handle_event(http_event("POST", "/join", {"Content-Type": "application/json"},
+                                            json.dumps({"code": server.desk.current_code().code}).encode(),
+                                            "10.0.0.9"))
+    assert result["statusCode"] == 429 and int(result["headers"]["Retry-After"]) > 0
+    assert call(server, "POST", "/join", {"code": server.desk.current_code().code},
+                address="10.0.0.10")[0] == 201, "another client still joins"
+
+
+def test_a_join_expires_and_renewing_it_keeps_the_sign_in_and_alias(server: BoardServer,
+                                                                    clock: Clock) -> None:
+    assert server.desk is not None
+    ada = join(server)
+    assert push(server, "Ada", ada)[0] == 201
+    clock.now += timedelta(hours=13)
+    assert push(server, "Ada", ada, ms=8900)[0] == 401
+    status, renewed = call(server, "POST", "/join", {"code": server.desk.current_code().code},
+                           token=ada)
+    assert status == 201 and renewed["renewed"] is True
+    assert push(server, "Ada", renewed["token"], ms=8900)[0] == 201
+
+
+def test_the_organiser_revokes_a_racer_by_alias(server: BoardServer) -> None:
+    assert server.desk is not None
+    ada, bob = join(server), join(server)
+    assert push(server, "Ada", ada)[0] == 201
+    assert push(server, "Bob", bob, ms=9500)[0] == 201
+    [revoked] = server.desk.revoke("ada")
+    assert revoked.alias == "Ada"
+    assert push(server, "Ada", ada, ms=8000)[0] == 401
+    status, again = call(server, "POST", "/join", {"code": server.desk.current_code().code},
+                         token=ada)
+    assert status == 201 and again["renewed"] is False, "a revoked sign-in is not renewed"
+    assert push(server, "Ada", again["token"], ms=8000)[1]["error"] == "AliasTaken"
+    assert push(server, "Bob", bob, ms=9400)[0] == 201
+    listed = {racer.alias: racer for racer in server.desk.joined()}
+    assert listed["Ada"].revoked and not listed["Bob"].revoked
+
+
+def test_the_pages_show_the_network_address_and_code_even_opened_as_localhost(
+        server: BoardServer) -> None:
+    assert server.desk is not None
+    server.public_url = "http://192.168.1.20:8000"
+    push(server, "Ada", join(server))
+    code = server.desk.current_code().code
+    result = server.handle_event(http_event("GET", "/boards/reInvent2019_track/view?screen=1",
+                                            {"Host": "localhost:8000"}, b"", "127.0.0.1"))
+    page = result["body"]
+    assert f"drboard join <strong>{code}</strong> --endpoint http://192.168.1.20:8000" in page
+    assert f"QR code: http://192.168.1.20:8000/join?code={code}" in page
+    assert "localhost" not in page and "127.0.0.1" not in page
+    joining = server.handle_event(http_event("GET", f"/join?code={code}", {}, b"", LAN))
+    assert joining["statusCode"] == 200
+    assert f"drboard join {code} --endpoint http://192.168.1.20:8000" in joining["body"]
 
 
 def test_a_made_up_token_signs_no_one_in(server: BoardServer) -> None:
@@ -136,6 +233,12 @@ def test_network_racers_cannot_moderate_or_read_the_audit_trail(server: BoardSer
     assert status == 200
     [event] = trail["events"]
     assert event["action"] == "push" and event["actor"].startswith("join:")
+    from drboard_cli import render
+    from drboard_functions.models.domain import AuditEvent
+
+    row = render.audit_detail(AuditEvent.model_validate(event | {"board_id": "reInvent2019_track"}))
+    assert row.startswith("model ")
+    assert render.actor_label(event["actor"], event["actor_name"], "Ada") == "Ada (joined)"
 
 
 def test_drboard_join_saves_a_token_only_its_owner_can_read(server: BoardServer) -> None:
@@ -149,12 +252,21 @@ def test_drboard_join_saves_a_token_only_its_owner_can_read(server: BoardServer)
     try:
         url = f"http://127.0.0.1:{server.server_address[1]}"
         assert server.desk is not None
-        result = CliRunner().invoke(cli, ["--endpoint", url, "join", server.desk.current_code().code])
+        code = server.desk.current_code().code
+        result = CliRunner().invoke(cli, ["join", code, "--endpoint", url])  # as serve prints it
         assert result.exit_code == 0, result.output
         saved = tokens.load(url)
         assert saved is not None and saved.kind == "join"
         assert oct(os.stat(tokens.tokens_path()).st_mode & 0o777) == "0o600"
-        wrong = CliRunner().invoke(cli, ["--endpoint", url, "join", "WRONG-CODE"])
-        assert wrong.exit_code == 1 and "wrong or has run out" in wrong.output
+        from drboard_cli import config
+
+        assert config.load_settings()["endpoint"] == url, "the joined board is the racer's board"
+        again = CliRunner().invoke(cli, ["--endpoint", url, "join", code])  # the global form
+        assert again.exit_code == 0 and "Renewed" in again.output
+        assert tokens.load(url).username == saved.username  # type: ignore[union-attr]
+        wrong = CliRunner().invoke(cli, ["join", "WRONG-CODE", "--endpoint", url])
+        assert wrong.exit_code == 1 and "join code is wrong" in wrong.output
+        odd = CliRunner().invoke(cli, ["join", "ÄÄÄÄ", "--endpoint", url])
+        assert odd.exit_code == 2, odd.output
     finally:
         server.shutdown()

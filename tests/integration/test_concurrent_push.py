@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from drboard_functions.errors import SubmissionLimitReached
-from drboard_functions.models import BoardSpec
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 

@@ -7,15 +7,20 @@ import random
 import threading
 import uuid
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import boto3
 import pytest
-from drboard_functions.errors import SubmissionLimitReached, TooSoon
-from drboard_functions.models import BoardSpec
+from botocore.exceptions import EndpointConnectionError
+from click.testing import CliRunner
+from drboard_cli.commands import organisers
+from drboard_cli.main import cli
+from drboard_functions.errors import StoreUnavailable, SubmissionLimitReached, TooSoon
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService
-from drboard_functions.stores import dynamodb
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
+from drboard_functions.stores.dynamodb import transaction as push_transaction
 from moto import mock_aws
 
 from tests.contract.store_contract import TRACK, StoreContract, at, make_board, write_for
@@ -254,32 +259,70 @@ def test_a_board_from_before_the_counters_ranks_exactly_and_gets_them_on_its_nex
         assert (reads.queried, reads.got) == (0, 3)  # three counters, no entry
 
 
-def test_counting_a_board_that_changes_meanwhile_keeps_only_a_count_of_one_moment(
+def test_a_push_in_the_middle_of_a_build_batch_is_counted_once(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 0)  # the push below builds nothing
+    monkeypatch.setattr(push_transaction, "LAZY_BUILD_MAX_RACERS", 0)  # the push below builds nothing
     with mock_aws():
-        client = boto3.client("dynamodb", region_name=REGION)
+        client, builder_client = (boto3.client("dynamodb", region_name=REGION) for _ in range(2))
         table = new_table(client)
         seed_board(client, table, 50)
-        builder, pusher = DynamoDbStore(table, client), DynamoDbStore(table, client)
+        builder, pusher = DynamoDbStore(table, builder_client), DynamoDbStore(table, client)
         scans = []
-        real_query = builder._query
+        real_query = builder_client.query
 
-        def push_during_the_first_scan(request: Any, limit: int | None = None) -> Any:
-            items = real_query(request, limit)
+        def push_during_the_first_batch(**request: Any) -> Any:
+            page = real_query(**request)
             if request.get("IndexName") == "by_rank" and not scans:
                 scans.append(request)  # read, not yet counted: now an entry comes
                 LeaderboardService(pusher).push(make_record("Sneaky", [(9_000, 100)]))
-            return items
+            return page
 
-        builder._query = push_during_the_first_scan  # type: ignore[method-assign]
-        generation = builder.build_rank_counters(TRACK)
-        assert generation is not None and scans
-        # the push during the first count is in the counters the board took: the racers it
+        monkeypatch.setattr(builder_client, "query", push_during_the_first_batch)
+        assert builder.build_rank_counters(TRACK).done and scans
+        # the push during the first batch is in the counters the board took: the racers it
         # passed rank one lower
         ranks = ranks_of(DynamoDbStore(table, client))
         assert "Sneaky" in ranks and max(ranks.values()) == 51
         assert ranks == listed_ranks(builder)
+
+
+def test_a_build_that_stops_goes_on_where_it_stopped_and_writes_meanwhile_keep_it_exact(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(push_transaction, "LAZY_BUILD_MAX_RACERS", 0)
+    with mock_aws():
+        client, builder_client = (boto3.client("dynamodb", region_name=REGION) for _ in range(2))
+        table = new_table(client)
+        seed_board(client, table, 400)
+        builder = DynamoDbStore(table, builder_client)
+        store = DynamoDbStore(table, client)
+        service = LeaderboardService(store)
+        batches = []
+        real_transact = builder_client.transact_write_items
+
+        def lost_connection_after_three_batches(**request: Any) -> Any:
+            if len(batches) == 3:
+                raise EndpointConnectionError(endpoint_url="https://dynamodb.eu-west-1.amazonaws.com")
+            batches.append(request)
+            return real_transact(**request)
+
+        monkeypatch.setattr(builder_client, "transact_write_items", lost_connection_after_three_batches)
+        with pytest.raises(StoreUnavailable):
+            builder.build_rank_counters(TRACK)
+        monkeypatch.setattr(builder_client, "transact_write_items", real_transact)
+        progress = builder.build_rank_counters(TRACK, budget_s=0)  # one batch more
+        assert not progress.done and 0 < progress.counted < progress.participants == 400
+        # Meanwhile racers push: counted ones improve, new ones come in ahead of and behind the
+        # entries counted so far, and an organiser takes one of the counted entries off.
+        first = store.top(TRACK, 3)
+        service.push(make_record(first[2].racer, [(5_000, 100)], model="faster"))
+        service.push(make_record("Newcomer", [(30_000, 100)]))
+        service.push(make_record("Flyer", [(4_000, 100)]))
+        assert store.remove_entry(TRACK, first[1].racer_key) is not None
+        finished = builder.build_rank_counters(TRACK)
+        assert finished.done and finished.participants == 401
+        ranks = ranks_of(DynamoDbStore(table, client))
+        assert ranks == listed_ranks(builder) and len(ranks) == 401
+        assert ranks["Flyer"] == 1 and ranks[first[2].racer] == 2
 
 
 def test_ranks_stay_exact_under_concurrent_pushes(dynamodb_local: DynamoDbLocal,
@@ -322,7 +365,7 @@ def test_a_rank_on_a_big_board_reads_three_counters(dynamodb_local: DynamoDbLoca
     client = dynamodb_local.client()
     seed_board(client, local_table, BIG_BOARD)
     store = DynamoDbStore(local_table, client)
-    assert store.build_rank_counters(TRACK) is not None
+    assert store.build_rank_counters(TRACK).done
     reads = ReadCounter(client)
     everything = store.top(TRACK, BIG_BOARD)
     for entry in everything[::97]:
@@ -334,7 +377,7 @@ def test_a_rank_on_a_big_board_reads_three_counters(dynamodb_local: DynamoDbLoca
 
 def test_a_push_leaves_a_big_board_from_before_the_counters_to_an_explicit_build(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(dynamodb, "LAZY_BUILD_MAX_RACERS", 100)
+    monkeypatch.setattr(push_transaction, "LAZY_BUILD_MAX_RACERS", 100)
     with mock_aws():
         client = boto3.client("dynamodb", region_name=REGION)
         table = new_table(client)
@@ -343,7 +386,36 @@ def test_a_push_leaves_a_big_board_from_before_the_counters_to_an_explicit_build
         receipt = LeaderboardService(store).push(make_record("Newcomer", [(19_000, 100)]))
         assert receipt.rank == listed_ranks(store)["Newcomer"]  # counted from the entries
         assert ranks_of(store) == listed_ranks(store)
-        assert store.build_rank_counters(TRACK, max_racers=100) is None
-        assert store.build_rank_counters(TRACK) is not None
+        assert not store.build_rank_counters(TRACK, budget_s=0).done  # the push built none
+        assert store.build_rank_counters(TRACK).done
         LeaderboardService(store).push(make_record("Latecomer", [(8_500, 100)]))
         assert ranks_of(store) == listed_ranks(store)
+
+
+def test_the_rebuild_ranks_command_builds_a_big_board_a_step_at_a_time(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setattr(organisers, "LOCAL_REBUILD_STEP_S", 0)  # a step per call: many calls
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        table = new_table(client)
+        seed_board(client, table, 300)
+        store = DynamoDbStore(table, client)
+        steps = []
+        service = LeaderboardService(store)
+        rebuild = service.rebuild_ranks
+
+        def counted_step(board_id: str, budget_s: float | None = None) -> Any:
+            steps.append(budget_s)
+            return rebuild(board_id, budget_s)
+
+        monkeypatch.setattr(service, "rebuild_ranks", counted_step)
+        result = CliRunner().invoke(cli, ["--db", str(tmp_path / "unused.db"), "board",
+                                          "rebuild-ranks", TRACK], obj=lambda db: service)
+        assert result.exit_code == 0, result.output
+        assert f"{TRACK}: rank counters built (300 racers)" in result.stdout
+        assert len(steps) > 3
+        assert ranks_of(store) == listed_ranks(store)
+        before = len(steps)
+        again = CliRunner().invoke(cli, ["--db", str(tmp_path / "unused.db"), "board",
+                                         "rebuild-ranks", TRACK], obj=lambda db: service)
+        assert again.exit_code == 0 and len(steps) == before + 1  # done at once

@@ -22,16 +22,9 @@ from drboard_functions.errors import (
     SubmissionLimitReached,
     TooSoon,
 )
-from drboard_functions.models import (
-    BoardChanges,
-    BoardSpec,
-    BoardStatus,
-    ExportedBoard,
-    ExportedEntry,
-    ExportedSubmission,
-    ImportedSubmission,
-    TimingMethod,
-)
+from drboard_functions.models.domain import BoardStatus, TimingMethod
+from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.base import BoardStore
 from drboard_functions.stores.dynamodb import DynamoDbStore

@@ -13,8 +13,8 @@ from click.testing import CliRunner, Result
 from drboard_cli.board_options import parse_duration, parse_when
 from drboard_cli.main import cli
 from drboard_functions import display
-from drboard_functions import service as service_module
 from drboard_functions.service import LeaderboardService
+from drboard_functions.service import transfer as transfer_module
 from drboard_functions.stores.sqlite import SqliteStore
 
 EXAMPLES = sorted(p for p in (Path(__file__).parents[2] / "examples").iterdir() if p.is_dir())
@@ -444,8 +444,8 @@ def export_file(drboard: Drboard, tmp_path: Path, board: str = "reInvent2019_tra
 @pytest.fixture
 def small_pages(monkeypatch: pytest.MonkeyPatch) -> None:
     """Export pages of two lines, so every export here takes several pages."""
-    monkeypatch.setattr(service_module, "EXPORT_ENTRIES", 2)
-    monkeypatch.setattr(service_module, "EXPORT_SUBMISSIONS", 2)
+    monkeypatch.setattr(transfer_module, "EXPORT_ENTRIES", 2)
+    monkeypatch.setattr(transfer_module, "EXPORT_SUBMISSIONS", 2)
 
 
 @pytest.fixture

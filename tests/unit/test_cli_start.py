@@ -18,7 +18,7 @@ from drboard_assembler.record import RaceType
 from drboard_cli import __version__, choices
 from drboard_cli.lazy import LazyGroup
 from drboard_cli.main import COMMANDS, cli
-from drboard_functions.models import MAX_COOLDOWN_S, TimingMethod
+from drboard_functions.models.domain import MAX_COOLDOWN_S, TimingMethod
 
 #: What the start of a command that only shows help must not import.
 HEAVY = ("pydantic", "drboard_assembler", "drboard_functions", "rich.console", "platformdirs",

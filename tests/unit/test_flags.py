@@ -10,7 +10,7 @@ import pytest
 from drboard_assembler import AssemblyError, assemble
 from drboard_assembler.record import EvaluationRun, Lap, Record
 from drboard_functions.flags import Flag, run_flags
-from drboard_functions.models import BoardSpec
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 

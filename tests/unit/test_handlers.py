@@ -23,7 +23,8 @@ os.environ.setdefault("POWERTOOLS_TRACE_DISABLED", "true")
 import boto3
 from drboard_assembler.record import Record
 from drboard_functions.handlers import admin, pull, push, wiring
-from drboard_functions.models import BoardView, ExportedSubmission, ExportPage
+from drboard_functions.models.transfer import ExportedSubmission, ExportPage
+from drboard_functions.models.views import BoardView
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
@@ -36,7 +37,8 @@ PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_r
 ADMIN_EVENTS = ["admin_create_board.json", "admin_update_board.json", "admin_close_board.json",
                 "admin_delete_board.json", "admin_restore_board.json", "admin_import_board.json",
                 "admin_import_submission.json", "admin_export_board.json", "admin_remove_entry.json",
-                "admin_ban_racer.json", "admin_unban_racer.json", "admin_audit.json"]
+                "admin_ban_racer.json", "admin_unban_racer.json", "admin_audit.json",
+                "admin_rebuild_ranks.json"]
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 
@@ -179,6 +181,14 @@ def test_an_organiser_manages_the_winter_cup_with_the_admin_events(
     assert service.boards() == []
     assert admin_call("admin_restore_board.json")[0] == 200
     assert [b.board_id for b in service.boards()] == ["winter-cup-2026"]
+
+
+def test_an_organiser_builds_a_boards_rank_counters_with_the_admin_event(
+        service: LeaderboardService) -> None:
+    service.push(event_record())
+    status, built = admin_call("admin_rebuild_ranks.json")
+    assert (status, built) == (200, {"board_id": "reInvent2019_track", "done": True,
+                                     "counted": 1, "participants": 1})
 
 
 def test_an_organiser_imports_last_seasons_cup_and_exports_it(service: LeaderboardService) -> None:

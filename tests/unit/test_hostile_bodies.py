@@ -19,7 +19,7 @@ from drboard_assembler import limits
 from drboard_cli.serve import LocalContext
 from drboard_functions.errors import SubmissionTooLarge
 from drboard_functions.handlers import admin, push, wiring
-from drboard_functions.models import ImportedSubmission
+from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 
@@ -121,7 +121,7 @@ def test_a_hostile_body_is_refused_cleanly_and_stores_nothing(
 
 
 def _event_board() -> Any:
-    from drboard_functions.models import Board
+    from drboard_functions.models.domain import Board
 
     return Board.model_validate_json(load("admin_import_board.json")["body"])
 

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 from drboard_assembler.record import MIN_LAP_MS, Record
 from drboard_cli.main import cli
 from drboard_functions.errors import BoardExists
-from drboard_functions.models import BoardSpec
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.routes import admin_router, build_app, pull_router, push_router
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore

@@ -52,6 +52,7 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("DELETE", "/boards/{board}"),
         ("POST", "/boards/{board}/close"),
         ("POST", "/boards/{board}/restore"),
+        ("POST", "/boards/{board}/rank-counters"),
         ("GET", "/boards/{board}/export"),
         ("PUT", "/boards/{board}/import"),
         ("POST", "/boards/{board}/imports"),
@@ -68,7 +69,7 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
 def test_every_organiser_route_is_signed_and_lists_its_refusals(document: dict[str, Any]) -> None:
     admin = [(method, path, operation) for path, item in document["paths"].items()
              for method, operation in item.items() if "admin" in operation["tags"]]
-    assert len(admin) == 12
+    assert len(admin) == 13
     for method, path, operation in admin:
         assert operation["security"] == [{"sigv4": []}], (method, path)
         assert {"400", "403"} <= set(operation["responses"]), (method, path)

@@ -15,7 +15,7 @@ import pytest
 from drboard_cli import remote
 from drboard_cli.remote import Answer, HttpBoard
 from drboard_functions.errors import DomainError, InvalidQuery
-from drboard_functions.models import BoardSpec
+from drboard_functions.models.requests import BoardSpec
 from drboard_functions.routes import admin_router, build_app, pull_router, push_router
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.dynamodb import DynamoDbStore

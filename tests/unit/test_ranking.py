@@ -6,7 +6,7 @@ from datetime import UTC, datetime, timedelta, timezone
 
 import pytest
 from drboard_functions import ranking
-from drboard_functions.models import BoardRules, Score, TimingMethod
+from drboard_functions.models.domain import BoardRules, Score, TimingMethod
 
 from tests.recordkit import LapSpec, make_record, make_run
 

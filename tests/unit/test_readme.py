@@ -22,13 +22,29 @@ def _readme_commands() -> list[str]:
 def test_quick_start_has_exactly_two_commands() -> None:
     commands = _readme_commands()
     assert len(commands) == 2
-    assert "drboard push examples/*/" in commands[0]
+    assert "push examples/*/" in commands[0]
+    # the examples go to a demo board of their own, never the user's default board
+    demo = re.search(r"drboard (--db \S+) push examples/\*/", commands[0])
+    assert demo, commands[0]
+    assert f"drboard {demo[1]} pull" in commands[0]
     assert "pytest" in commands[1]
 
 
-def test_ci_runs_the_readme_test_command() -> None:
+def test_ci_runs_the_readme_test_command_one_step_at_a_time() -> None:
+    # One step per line, in order, so that under `set -e` a failed install stops the run: a
+    # failure inside an `a && b && c` list does not.
     ci = ROOT.joinpath(".ci", "run").read_text()
-    assert _readme_commands()[1] in ci.splitlines()
+    steps = _readme_commands()[1].split(" && ")
+    lines = ci.splitlines()
+    assert steps[0] in lines
+    start = lines.index(steps[0])
+    assert lines[start:start + len(steps)] == steps
+    assert "set -e" in ci and " && pytest" not in ci
+
+
+def test_ci_fails_a_test_that_would_skip() -> None:
+    ci = ROOT.joinpath(".ci", "run").read_text().splitlines()
+    assert "export CI=true" in ci
 
 
 # ---- every command is documented, in --help and in the README's CLI reference -------------------

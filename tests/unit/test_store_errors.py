@@ -23,11 +23,12 @@ from drboard_assembler.record import Record
 from drboard_cli.serve import LocalContext, _refused
 from drboard_functions import errors, services
 from drboard_functions.handlers import push, wiring
-from drboard_functions.models import BoardList
+from drboard_functions.models.views import BoardList
 from drboard_functions.routes import ERROR_STATUS, build_app, pull_router
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores import dynamodb, sqlite
 from drboard_functions.stores.dynamodb import DynamoDbStore
+from drboard_functions.stores.dynamodb import transaction as push_transaction
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
 from samtranslator.yaml_helper import yaml_parse
@@ -175,7 +176,7 @@ def test_a_transaction_that_keeps_losing_races_answers_503(
                            CancellationReasons=[{"Code": "None"}, {"Code": "TransactionConflict"}])
 
     monkeypatch.setattr(table.client, "transact_write_items", conflict)  # type: ignore[attr-defined]
-    monkeypatch.setattr(dynamodb, "_backoff", lambda attempt: None)
+    monkeypatch.setattr(push_transaction, "backoff", lambda attempt: None)
     answer = push_event()
     assert answer["statusCode"] == 503
     assert json.loads(answer["body"])["error"] == "StoreBusy"

@@ -22,7 +22,8 @@ from drboard_assembler import Overrides, Record, assemble
 from drboard_cli.main import cli
 from drboard_cli.watch import MAX_RETRY_S, PushedEvaluations, Watcher, WatchSummary
 from drboard_functions import errors as domain
-from drboard_functions.models import BoardSpec, PushReceipt
+from drboard_functions.models.requests import BoardSpec
+from drboard_functions.models.views import PushReceipt
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 from rich.console import Console

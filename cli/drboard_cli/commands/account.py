@@ -79,15 +79,18 @@ def configure(stack_name: str | None, region: str | None, endpoint_url: str | No
               help="Sign in with your user name and password here, with no browser.")
 @click.option("--username", help="With --password: your user name (asked for otherwise).")
 @click.option("--no-browser", is_flag=True,
-              help="Print the sign-in page's address instead of opening a browser.")
+              help="For a machine with no browser: print the sign-in address, sign in on any "
+                   "device, and paste back the address the browser shows then (or its code).")
 @pass_context
 def login(ctx: Context, use_password: bool, username: str | None, no_browser: bool) -> None:
     """Sign in to a deployed board, as a racer or an organiser.
 
     Opens the board's sign-in page in your browser and waits for it to send you back (to
-    http://localhost:8765/callback). With --password, asks for your user name and password here
-    instead (an invited racer's temporary password is replaced by a new one). The token is saved
-    for that board in your user config folder, readable by you only, and renewed before it
+    http://localhost:8765/callback). With --no-browser (a headless machine), prints the
+    address: sign in on any device, then paste here the address the browser ends on (it does
+    not load, but holds the code) or the code alone. With --password, asks for your user name
+    and password here instead (an invited racer's temporary password is replaced by a new one).
+    The token is saved for that board in your user config folder, readable by you only, and renewed before it
     expires; `drboard logout` forgets it.
     """
     from .. import login as signing_in
@@ -102,12 +105,18 @@ def login(ctx: Context, use_password: bool, username: str | None, no_browser: bo
                 endpoint, settings, name, password,
                 new_password=lambda: click.prompt("Choose a new password", hide_input=True,
                                                   confirmation_prompt=True))
+        elif no_browser:
+            def show_address(url: str) -> None:
+                err().print(f"Open this address on any device and sign in:\n{url}\n", soft_wrap=True)
+
+            token = signing_in.login_with_pasted_code(
+                endpoint, settings, show_address,
+                ask=lambda: click.prompt("Then paste the address your browser ends on (or its code)"))
         else:
             def show(url: str) -> None:
-                err().print(f"Sign in at: {url}" if no_browser else
-                            f"Opening your browser to sign in (or open {url})", soft_wrap=True)
+                err().print(f"Opening your browser to sign in (or open {url})", soft_wrap=True)
 
-            token = signing_in.login_in_browser(endpoint, settings, show, open_browser=not no_browser)
+            token = signing_in.login_in_browser(endpoint, settings, show)
         out().print(f"Signed in to {endpoint} as {token.username or 'you'}.", soft_wrap=True)
 
 
@@ -136,20 +145,33 @@ def whoami(ctx: Context) -> None:
 
 @click.command()
 @click.argument("code")
+@click.option("--endpoint", "endpoint_url", metavar="URL",
+              help="The board to join, as `drboard serve` shows it (the same as the global "
+                   "`drboard --endpoint URL join CODE`).")
 @pass_context
-def join(ctx: Context, code: str) -> None:
+def join(ctx: Context, code: str, endpoint_url: str | None) -> None:
     """Sign in to a `drboard serve` board with the join code its organiser shows.
 
-    Give the board with `--endpoint URL` (or `drboard configure --endpoint URL` first). The
-    token it answers is saved for that board in your user config folder, readable by you only.
+    Type it as `drboard serve` and the big screen show it: `drboard join CODE --endpoint URL`.
+    The token the board answers is saved for that board in your user config folder, readable
+    by you only, and the board becomes the one your commands use (`drboard push ./my-model`
+    pushes there; `drboard configure --local` goes back to your own board). Joining again
+    renews an expired token and keeps your racer alias.
     """
-    from .. import tokens
+    from .. import config, tokens
     from ..remote import HttpBoard
 
     with edge():
-        board = HttpBoard(_endpoint(ctx, "join CODE"))
-        joined = board.join(code)
+        if endpoint_url and not endpoint_url.startswith(("http://", "https://")):
+            raise click.UsageError("--endpoint must be an http:// URL, as `drboard serve` shows it")
+        board = HttpBoard(endpoint_url or _endpoint(ctx, "join CODE"))
+        held = tokens.load(board.endpoint)
+        joined = board.join(code, renewing=held.access_token if held and held.kind == "join" else None)
         tokens.save(board.endpoint, tokens.SavedToken(kind="join", access_token=joined.token,
-                                                      username=joined.principal))
-        out().print(f"Joined {board.endpoint} as {joined.principal}. Your first push claims your "
-                    "racer alias (or claim it now with `drboard alias NAME`).", soft_wrap=True)
+                                                      username=joined.principal,
+                                                      expires_at=joined.expires_at))
+        config.save_settings(endpoint=board.endpoint, stack_name=None)
+        again = "Renewed your join to" if joined.renewed else "Joined"
+        out().print(f"{again} {board.endpoint} as {joined.principal}; it is now the board your "
+                    "commands use. Push with `drboard push ./my-model`: your first push claims "
+                    "your racer alias (or claim it now with `drboard alias NAME`).", soft_wrap=True)

@@ -114,6 +114,33 @@ def board_close(ctx: Context, board_id: str) -> None:
         out().print(render.board_panel(ctx.board.close_board(board_id)))
 
 
+#: How long the embedded board counts between two progress reports.
+LOCAL_REBUILD_STEP_S = 2.0
+
+
+@board_group.command(name="rebuild-ranks")
+@click.argument("board_id", metavar="ID")
+@pass_context
+def board_rebuild_ranks(ctx: Context, board_id: str) -> None:
+    """Build the rank counters of a big board from before them, with progress.
+
+    Until then such a board (on DynamoDB) ranks each racer by counting the better entries. The
+    entries are counted a batch at a time while racers go on pushing; stopped (Ctrl-C, a lost
+    connection), the command goes on where it stopped when run again. A board that has its
+    counters (every embedded board does) is done at once.
+    """
+    from .. import render
+
+    with edge(), render.progress(err()) as progress:
+        task = progress.add_task("Counting entries", total=None)
+        while True:
+            built = ctx.board.rebuild_ranks(board_id, LOCAL_REBUILD_STEP_S)
+            progress.update(task, completed=built.counted, total=built.participants)
+            if built.done:
+                break
+    out().print(f"{board_id}: rank counters built ({built.participants:,} racers)", soft_wrap=True)
+
+
 @board_group.command(name="delete")
 @click.argument("board_id", metavar="ID")
 @pass_context
@@ -194,7 +221,7 @@ def audit(ctx: Context, board_id: str, fmt: str) -> None:
         if fmt == "json":
             out().print_json(data=[e.model_dump(mode="json") for e in events])
         else:
-            out().print(render.audit_table(board_id, events))
+            out().print(render.audit_table(board_id, events, out().width))
 
 
 @click.command(name="export")

@@ -86,8 +86,12 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
          dry_run: bool, watch: bool, interval: float, only_new: bool) -> None:
     """Assemble each run folder and submit it to the board.
 
-    Every path is read and checked first: if one is bad, nothing is pushed. Prints each run's
-    rank and whether it is a new best. Pushing the same run twice changes nothing.
+    Every path is read and checked first, and, with several, checked against the board too
+    (its track, direction and race type, whether it is open, its cooldown and maximum): if one
+    is bad, nothing is pushed and the message names it. Then it says what it will push, and
+    pushes each run in turn, printing its rank and whether it is a new best; a run the board
+    refuses then is named and the others still go, and a summary ends the batch (exit 1 if any
+    was refused). Pushing the same run twice changes nothing.
 
     With --watch, PATH is a folder a training writes to: every evaluation in it (unless
     --only-new) and every new one is pushed on its own once complete, i.e. once its metrics file
@@ -112,10 +116,72 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
             for path, record in zip(paths, records, strict=True):
                 _print_dry_run(path, record)
             return
-        for record in records:
-            receipt = ctx.board.push(record, board_id)
+        if len(records) == 1:
+            receipt = ctx.board.push(records[0], board_id)
             out().print(render.receipt_line(receipt), soft_wrap=True)
-        config.save_settings(racer=records[-1].racer)
+        else:
+            _push_batch(ctx, paths, records, board_id)
+        config.save_settings(last_racer=records[-1].racer)
+
+
+def _push_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record],
+                board_id: str | None) -> None:
+    """Several runs: checked against the board first (none pushed if one cannot go), then each
+    pushed in turn; a refusal names its run and the others still go; a summary ends it."""
+    from drboard_functions.errors import BoardUnreachable, DomainError
+
+    from .. import render
+    from ..main import domain_exit_code, fail
+
+    if board_id:
+        _check_batch(ctx, paths, records, board_id)
+    where = board_id or "each run's track board"
+    err().print(f"Pushing {len(records)} runs to {where}, one at a time; a run the board refuses "
+                "is named and the others still go.", soft_wrap=True)
+    refused: list[tuple[Path, DomainError]] = []
+    for path, record in zip(paths, records, strict=True):
+        try:
+            receipt = ctx.board.push(record, board_id)
+        except BoardUnreachable:
+            raise
+        except DomainError as error:
+            refused.append((path, error))
+            err().print(f"{path}: refused: {error.message}", style="yellow", soft_wrap=True)
+            continue
+        out().print(render.receipt_line(receipt), soft_wrap=True)
+    pushed = len(records) - len(refused)
+    if refused:
+        named = "; ".join(f"{path} ({type(error).__name__})" for path, error in refused)
+        fail(f"pushed {pushed} of {len(records)} runs; refused: {named}",
+             max(domain_exit_code(type(error)) for _, error in refused))
+    err().print(f"Pushed all {len(records)} runs.", soft_wrap=True)
+
+
+def _check_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record], board_id: str) -> None:
+    """Refuse the whole batch, naming the run, when one cannot go on the named board."""
+    from collections import Counter
+
+    from drboard_functions.display import duration
+    from drboard_functions.models.domain import BoardStatus, run_mismatches
+
+    from ..main import BAD_INPUT, FAILURE, fail
+
+    board = ctx.board.board_page(board_id, 1, None).board
+    for path, record in zip(paths, records, strict=True):
+        wrong = run_mismatches(record.track, record.direction, record.race_type, board)
+        if wrong:
+            fail(f"{path}: this run does not belong on {board_id!r} (its {', '.join(wrong)} "
+                 "differs): nothing was pushed", BAD_INPUT)
+    if board.status is not BoardStatus.OPEN:
+        fail(f"{board_id} is {board.status.value.lower()}: nothing was pushed", FAILURE)
+    for racer, count in Counter(record.racer for record in records).items():
+        if board.cooldown_s and count > 1:
+            fail(f"{board_id} takes one push from {racer} every {duration(board.cooldown_s)}, and "
+                 f"these are {count} runs of theirs: push them one at a time; nothing was pushed",
+                 FAILURE)
+        if board.max_submissions is not None and count > board.max_submissions:
+            fail(f"{board_id} takes at most {board.max_submissions} submissions from {racer}, and "
+                 f"these are {count}: nothing was pushed", FAILURE)
 
 
 def _watch(ctx: Context, paths: tuple[Path, ...], overrides: Overrides, board_id: str | None,
@@ -139,7 +205,7 @@ def _watch(ctx: Context, paths: tuple[Path, ...], overrides: Overrides, board_id
     finally:
         signal.signal(signal.SIGTERM, previous)
         if watcher.summary.last_racer:
-            config.save_settings(racer=watcher.summary.last_racer)
+            config.save_settings(last_racer=watcher.summary.last_racer)
 
 
 def _print_dry_run(path: Path, record: Record) -> None:

@@ -27,7 +27,7 @@ def _board_id(track: str | None, board: str | None) -> str:
 def _racer(racer: str | None) -> str:
     from .. import config
 
-    racer = racer or config.load_settings().get("racer")
+    racer = racer or config.default_racer()
     if not racer:
         raise click.UsageError("give --racer (no racer has pushed from this machine yet)")
     return str(racer)
@@ -57,7 +57,7 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
 
 
 def _collect(client: BoardClient, board_id: str, top: int) -> Any:
-    from drboard_functions.models import MAX_PAGE
+    from drboard_functions.models.domain import MAX_PAGE
 
     page = client.board_page(board_id, min(top, MAX_PAGE), None)
     entries = list(page.entries)
@@ -190,7 +190,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
         if fmt == "json":
             click.echo(render.write_json([i.model_dump(mode="json") for i in items]), nl=False)
         elif items:
-            out().print(render.history_table(name, items))
+            out().print(render.history_table(name, items, out().width))
         else:
             out().print(f"No submissions by {name} yet.")
 
@@ -232,4 +232,4 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
         if fmt == "json":
             click.echo(summary.model_dump_json(indent=2))
         else:
-            out().print(render.status_table(summary))
+            out().print(render.status_table(summary, out().width))

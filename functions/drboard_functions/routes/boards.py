@@ -12,15 +12,7 @@ from aws_lambda_powertools.event_handler import (
 )
 
 from ..identity import SignIn
-from ..models import (
-    BoardList,
-    BoardPage,
-    Comparison,
-    Insights,
-    RacerHistory,
-    RacerSummary,
-    RacerView,
-)
+from ..models.views import BoardList, BoardPage, Comparison, Insights, RacerHistory, RacerSummary, RacerView
 from ..service import DEFAULT_TOP
 from ..views import page_tag
 from .params import (

@@ -13,17 +13,10 @@ from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import limits
 
 from ..errors import InvalidQuery
-from ..models import (
-    AuditPage,
-    Board,
-    BoardChanges,
-    BoardSpec,
-    BoardView,
-    ExportPage,
-    ImportedSubmission,
-    ImportReceipt,
-    Moderation,
-)
+from ..models.domain import Board
+from ..models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from ..models.transfer import ExportPage, ImportReceipt
+from ..models.views import AuditPage, BoardView, Moderation, RankCounters
 from .params import (
     ADMIN_TAG,
     BOARD_BODY,
@@ -124,6 +117,25 @@ def update_board(board: BoardId,
 )
 def close_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.close_board(segment(board), caller=organiser)
+
+
+#: How long one request builds rank counters: well within the function's timeout.
+REBUILD_BUDGET_S = 5.0
+
+
+@admin_router.post(
+    "/boards/<board>/rank-counters",
+    summary="Build a board's rank counters",
+    description="A board from before the rank counters ranks by counting its better entries "
+                "until its counters are built. Each request counts entries for a few seconds "
+                "and says how far it got; ask again until `done` (a stopped build goes on where "
+                "it stopped). A board that has its counters answers `done` at once.",
+    responses=_admin_responses(json_response("How far the build got.", RankCounters),
+                               errors={404: _NO_BOARD}),
+    **_ADMIN,
+)
+def rebuild_ranks(board: BoardId, service: Service, organiser: Organiser) -> RankCounters:
+    return service.rebuild_ranks(segment(board), budget_s=REBUILD_BUDGET_S)
 
 
 @admin_router.delete(

@@ -1,4 +1,9 @@
-"""The web pages, on the pull router: HTML built by :mod:`drboard_functions.web`."""
+"""The web pages, on the pull router: HTML built by :mod:`drboard_functions.web`.
+
+`drboard serve` puts an ``invite`` in the resolver's context (a function answering a
+:class:`~drboard_functions.web.Invite`): the board's network address and join code, which the
+pages show instead of the address the browser used (a screen opened as ``localhost`` on the
+serving laptop must still tell racers the address their laptops reach)."""
 
 from __future__ import annotations
 
@@ -9,7 +14,7 @@ from aws_lambda_powertools.event_handler import Request, Response
 
 from .. import web
 from ..errors import BoardNotFound
-from ..models import MAX_PAGE
+from ..models.domain import MAX_PAGE
 from ..service import DEFAULT_TOP
 from ..views import page_tag
 from .params import (
@@ -26,13 +31,7 @@ from .params import (
     pull_router,
     segment,
 )
-from .responses import PAGE_HEADERS, PAGE_RESPONSE, error_response, etag_headers, page_answer, page_etag
-
-#: A live board page: its one inline script, allowed by hash, and requests to its own origin.
-LIVE_PAGE_HEADERS = {
-    "Content-Security-Policy": PAGE_HEADERS["Content-Security-Policy"]
-    + f"; script-src '{web.LIVE_SCRIPT_HASH}'; connect-src 'self'",
-}
+from .responses import PAGE_RESPONSE, error_response, etag_headers, page_answer, page_etag, page_policy
 
 
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],
@@ -62,17 +61,31 @@ def board_view(board: BoardId, service: Service, request: Request, limit: Limit 
                 return page_answer("", HTTPStatus.NOT_MODIFIED, etag_headers(etag))
         page = service.board_page(board_id, limit=limit, cursor=cursor or None)
     except BoardNotFound:  # a screen set up before the first push waits for the board
-        return page_answer(web.waiting_page(board_id, screen), HTTPStatus.NOT_FOUND, LIVE_PAGE_HEADERS)
+        invite = _invite(request)
+        return page_answer(web.waiting_page(board_id, screen, join_code=invite.code,
+                                            endpoint=invite.endpoint),
+                           HTTPStatus.NOT_FOUND, page_policy(live=True))
     etag = page_etag(f"{view}.{page_tag(page.board)}", limit, cursor)
-    origin = _origin(request.resolved_event)
-    url = origin + web.board_path(board_id)
+    invite = _invite(request)
+    url = invite.join_url if invite.code else invite.endpoint + web.board_path(board_id)
     html = web.board_page(page, etag, screen=screen, now=service.clock(), url=url,
-                          endpoint=origin, qr_svg=web.qr_svg(url) if screen else "")
-    return page_answer(html, headers=LIVE_PAGE_HEADERS | etag_headers(etag))
+                          endpoint=invite.endpoint, qr_svg=web.qr_svg(url) if screen else "",
+                          join_code=invite.code)
+    return page_answer(html, headers=page_policy(live=True) | etag_headers(etag))
+
+
+def _invite(request: Request) -> web.Invite:
+    """How racers reach this board: what `drboard serve` says, else the origin the client used
+    (https behind API Gateway), with no join code."""
+    given = request.context.get("invite")
+    if callable(given):
+        invite = given()
+        if isinstance(invite, web.Invite):
+            return invite
+    return web.Invite(endpoint=_origin(request.resolved_event))
 
 
 def _origin(event: Any) -> str:
-    """The board's own origin as the client reached it (https behind API Gateway)."""
     headers = event.headers or {}
     context = event.raw_event.get("requestContext") or {}
     host = headers.get("host") or context.get("domainName") or "localhost"
@@ -87,7 +100,15 @@ def _origin(event: Any) -> str:
     responses={200: PAGE_RESPONSE, 404: error_response("No such board or racer.")},
 )
 def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[str]:
-    return page_answer(web.racer_page(service.racer(segment(board), segment(racer), MAX_PAGE)))
+    view = service.racer(segment(board), segment(racer), MAX_PAGE)
+    leader = ahead = None
+    if view.entry.rank > 1 and view.record is not None:
+        # the racers to compare with: the leader, and the one just ahead on a short enough board
+        above = service.board_page(view.board.board_id, limit=min(view.entry.rank - 1, MAX_PAGE),
+                                   cursor=None).entries
+        leader = above[0].racer if above else None
+        ahead = above[-1].racer if above and view.entry.rank - 1 <= MAX_PAGE else None
+    return page_answer(web.racer_page(view, leader=leader, ahead=ahead))
 
 
 @pull_router.get(
@@ -98,7 +119,10 @@ def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[
                404: error_response("No such board or racer.")},
 )
 def compare_view(board: BoardId, service: Service, racer: Compared) -> Response[str]:
-    return page_answer(web.compare_page(service.compare(segment(board), racer)))
+    board_id = segment(board)
+    comparison = service.compare(board_id, racer)
+    records = [service.racer(board_id, compared.racer, 1).record for compared in comparison.racers]
+    return page_answer(web.compare_page(comparison, records))
 
 
 @pull_router.get(

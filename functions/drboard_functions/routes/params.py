@@ -33,7 +33,7 @@ from ..errors import (
     SubmissionTooLarge,
 )
 from ..identity import Caller, SignIn, caller_from_event
-from ..models import MAX_PAGE
+from ..models.domain import MAX_PAGE
 from ..service import MAX_COMPARED, MAX_TOP, LeaderboardService
 
 DEFAULT_LIMIT = 100

@@ -16,10 +16,9 @@ from drboard_assembler import __version__ as assembler_version
 from pydantic import BaseModel, ConfigDict, Field
 
 HTML = "text/html; charset=utf-8"
-#: The web pages load nothing and run no script: only their own inline style.
+#: Every page's headers; its Content-Security-Policy comes from :func:`page_answer` (the pages
+#: load nothing and run no script but their own inlined style and script, allowed by hash).
 PAGE_HEADERS = {
-    "Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'; base-uri 'none'; "
-                               "form-action 'none'; frame-ancestors 'none'",
     "X-Content-Type-Options": "nosniff",
     "Cache-Control": "no-store",
 }
@@ -84,7 +83,14 @@ def json_answer(status: int, body: BaseModel) -> Response[Any]:
 def page_answer(html: str, status: int = HTTPStatus.OK,
                 headers: dict[str, str] | None = None) -> Response[str]:
     return Response(status_code=status, content_type=HTML, body=html,
-                    headers=PAGE_HEADERS | (headers or {}))
+                    headers=PAGE_HEADERS | page_policy() | (headers or {}))
+
+
+def page_policy(*, live: bool = False) -> dict[str, str]:
+    """The page's Content-Security-Policy; a live page's allows its script too."""
+    from ..web import content_security_policy
+
+    return {"Content-Security-Policy": content_security_policy(live=live)}
 
 
 def page_etag(tag: str, limit: int, cursor: str | None) -> str:

@@ -10,11 +10,8 @@ from aws_lambda_powertools.event_handler.openapi.params import Body
 from drboard_assembler import limits
 from drboard_assembler.record import Record
 
-from ..models import (
-    AliasRequest,
-    Me,
-    PushReceipt,
-)
+from ..models.requests import AliasRequest
+from ..models.views import Me, PushReceipt
 from .params import ALIAS_BODY, RECORD_BODY, SIGV4, BoardId, Service, SignedIn, push_router, segment, takes
 from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_answer, json_response
 

@@ -8,7 +8,7 @@ from typing import NamedTuple, Protocol
 
 from drboard_assembler.record import Record
 
-from ..models import (
+from ..models.domain import (
     AliasClaim,
     AuditEvent,
     Board,
@@ -50,6 +50,15 @@ class FingerprintTaken(Exception):
     def __init__(self, racer_key: str) -> None:
         super().__init__(f"already on the board as {racer_key!r}")
         self.racer_key = racer_key
+
+
+class RankBuild(NamedTuple):
+    """How far the building of a board's rank counters got: ``done`` once the board ranks from
+    its counters; ``counted`` of its ``participants`` entries counted so far."""
+
+    done: bool
+    counted: int
+    participants: int
 
 
 class BoardHasEntries(Exception):
@@ -185,6 +194,12 @@ class BoardStore(Protocol):
     def remove_entry(self, board_id: str, racer_key: str) -> Entry | None:
         """Take the racer's entry off the board (its submissions stay), bumping the board's
         version; the removed entry."""
+
+    def build_rank_counters(self, board_id: str, budget_s: float | None = None) -> RankBuild:
+        """Count the entries of a board from before the rank counters into its counters, a
+        batch at a time for up to ``budget_s`` seconds (None: to the end); a later call goes on
+        where this one stopped. A board that has its counters is done at once."""
+        ...
 
     def restore_entry(self, entry: Entry) -> None:
         """Put back an entry for a racer who has none on the board, bumping its version."""

@@ -20,7 +20,7 @@ from drboard_assembler.record import Record
 
 from .. import ranking
 from ..errors import StoreBusy
-from ..models import (
+from ..models.domain import (
     AliasClaim,
     AuditEvent,
     Board,
@@ -39,6 +39,7 @@ from .base import (
     FingerprintTaken,
     HistorySlice,
     LimitReached,
+    RankBuild,
     StoredBoard,
     StoredSubmissionPage,
     SubmissionPage,
@@ -402,6 +403,13 @@ class SqliteStore:
                 db.execute("UPDATE boards SET participants = participants - 1, version = version + 1 "
                            "WHERE board_id = ?", (board_id,))
             return current
+
+    def build_rank_counters(self, board_id: str, budget_s: float | None = None) -> RankBuild:
+        """Every board here has its rank counts: a board file from before them gets them when
+        it is opened."""
+        stored = self.get_board(board_id)
+        participants = stored.participants if stored else 0
+        return RankBuild(done=stored is not None, counted=participants, participants=participants)
 
     def restore_entry(self, entry: Entry) -> None:
         with self._write() as db:

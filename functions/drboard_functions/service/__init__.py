@@ -1,0 +1,102 @@
+"""The leaderboard's use cases, one room per concern, behind one façade.
+
+The service never touches a database: it speaks to a BoardStore. It takes validated Records and
+returns the view models the API serialises and the CLI prints. Each concern has its own module:
+``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
+``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
+``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
+trail's reading) and ``transfer`` (export and import). :class:`LeaderboardService` only hands
+each call to the room that answers it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Concatenate, ParamSpec, TypeVar
+
+from ..stores.base import BoardStore, RecordArchive
+from .boards import (
+    CUSTOM_PREFIX,
+    BoardKeeper,
+    Clock,
+    board_for_track,
+    default_board_id,
+    is_default_board_id,
+    racer_key,
+    utc_now,
+)
+from .managing import Managing
+from .moderating import Moderating
+from .paging import DEFAULT_PAGE
+from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
+from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+from .transfer import Transfer
+
+P = ParamSpec("P")
+R = TypeVar("R")
+
+__all__ = [
+    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "MAX_COMPARED", "MAX_TOP", "Clock",
+    "LeaderboardService", "board_for_track", "check_record_size", "default_board_id",
+    "evaluation_fingerprints", "is_default_board_id", "racer_key", "scored_write", "utc_now",
+]
+
+
+def _handed_to(room: str, method: Callable[Concatenate[Any, P], R]) -> Callable[Concatenate[Any, P], R]:
+    """A façade method that hands the call to the same method of one of the service's rooms."""
+    name = method.__name__
+
+    def hand_over(self: Any, /, *args: P.args, **kwargs: P.kwargs) -> R:
+        answer: R = getattr(getattr(self, room), name)(*args, **kwargs)
+        return answer
+
+    hand_over.__name__ = hand_over.__qualname__ = name
+    hand_over.__doc__ = method.__doc__
+    return hand_over
+
+
+class LeaderboardService:
+    """Every use case of the board, for the edges (routes, CLI, serve) to call."""
+
+    def __init__(self, store: BoardStore, clock: Clock = utc_now,
+                 archive: RecordArchive | None = None) -> None:
+        self.store = store
+        self.clock = clock
+        self.archive = archive
+        keeper = BoardKeeper(store, clock)
+        self._pushing = Pushing(keeper, archive)
+        self._reading = Reading(keeper)
+        self._managing = Managing(keeper)
+        self._moderating = Moderating(keeper)
+        self._transfer = Transfer(keeper, archive)
+
+    push = _handed_to("_pushing", Pushing.push)
+    me = _handed_to("_pushing", Pushing.me)
+    claim_alias = _handed_to("_pushing", Pushing.claim_alias)
+
+    boards = _handed_to("_reading", Reading.boards)
+    boards_page = _handed_to("_reading", Reading.boards_page)
+    board_page = _handed_to("_reading", Reading.board_page)
+    board_tag = _handed_to("_reading", Reading.board_tag)
+    racer = _handed_to("_reading", Reading.racer)
+    compare = _handed_to("_reading", Reading.compare)
+    insights = _handed_to("_reading", Reading.insights)
+    history = _handed_to("_reading", Reading.history)
+    history_page = _handed_to("_reading", Reading.history_page)
+    status = _handed_to("_reading", Reading.status)
+
+    create_board = _handed_to("_managing", Managing.create_board)
+    update_board = _handed_to("_managing", Managing.update_board)
+    close_board = _handed_to("_managing", Managing.close_board)
+    delete_board = _handed_to("_managing", Managing.delete_board)
+    restore_board = _handed_to("_managing", Managing.restore_board)
+    rebuild_ranks = _handed_to("_managing", Managing.rebuild_ranks)
+
+    remove_entry = _handed_to("_moderating", Moderating.remove_entry)
+    ban = _handed_to("_moderating", Moderating.ban)
+    unban = _handed_to("_moderating", Moderating.unban)
+    audit = _handed_to("_moderating", Moderating.audit)
+
+    export_page = _handed_to("_transfer", Transfer.export_page)
+    import_board = _handed_to("_transfer", Transfer.import_board)
+    import_submission = _handed_to("_transfer", Transfer.import_submission)

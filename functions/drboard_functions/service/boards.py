@@ -1,0 +1,232 @@
+"""BoardKeeper as every part of the service sees them: which board a run belongs on, a track's
+default boards, the checks a board makes of a run, and the audit trail of what is done to it."""
+
+from __future__ import annotations
+
+import re
+import secrets
+from collections.abc import Callable
+from datetime import UTC, datetime
+from typing import Any, Literal
+
+from drboard_assembler.aliases import alias_key
+from drboard_assembler.catalog import UnknownTrackError, default_catalog
+from drboard_assembler.errors import field_path
+from drboard_assembler.record import RaceType, Record
+from pydantic import ValidationError
+
+from .. import display, ranking
+from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
+from ..identity import Caller
+from ..models.domain import AuditAction, AuditEvent, Board, BoardRules, BoardStatus, Entry, run_mismatches
+from ..models.requests import BoardSpec
+from ..models.views import BoardView
+from ..stores.base import BoardHasEntries, BoardStore, StoredBoard
+from ..views import board_view
+
+Clock = Callable[[], datetime]
+
+_RACE_SUFFIX = {
+    RaceType.TIME_TRIAL: "",
+    RaceType.OBJECT_AVOIDANCE: "_oa",
+    RaceType.HEAD_TO_BOT: "_h2b",
+    RaceType.HEAD_TO_MODEL: "_h2m",
+    RaceType.HEAD_TO_HEAD_RACING: "_h2h",
+    RaceType.F1: "_f1",
+}
+_RACE_TITLE = {
+    RaceType.TIME_TRIAL: "",
+    RaceType.OBJECT_AVOIDANCE: ", object avoidance",
+    RaceType.HEAD_TO_BOT: ", head to bot",
+    RaceType.HEAD_TO_MODEL: ", head to model",
+    RaceType.HEAD_TO_HEAD_RACING: ", head to head",
+    RaceType.F1: ", F1",
+}
+
+#: A custom track's default boards are ``custom.<track>...``: a push for a track of one's own
+#: can take neither an official track's board id nor a named board's (which may not start so).
+CUSTOM_PREFIX = "custom."
+
+LOCKED = ("{!r} has entries: its track, timing method, minimum laps and flagged-run rule can no "
+          "longer change "
+          "(create a new board, or export it and import into one with the new rules)")
+
+EVENT_ID = re.compile(r"^[0-9T:.Z-]{27}-[0-9a-f]{8}$")
+
+
+def utc_now() -> datetime:
+    return datetime.now(UTC)
+
+
+def racer_key(racer: str) -> str:
+    """Racer aliases are matched after Unicode NFKC and case folding, white space collapsed."""
+    return alias_key(racer)
+
+
+def default_board_id(track: str, direction: str | None, race_type: RaceType) -> str:
+    """A track's default board: counter-clockwise and unspecified runs share the track's board;
+    clockwise runs, and race types other than time trial, rank on boards of their own."""
+    prefix = "" if default_catalog().is_official(track) else CUSTOM_PREFIX
+    return prefix + track + ("_cw" if direction == "cw" else "") + _RACE_SUFFIX[race_type]
+
+
+def board_for_track(name: str, race_type: RaceType = RaceType.TIME_TRIAL,
+                    clockwise: bool = False) -> str:
+    """The default board of a track given by any of its names (``reInvent2019``, ``Smile
+    Speedway``, ``reInvent2019_track_cw``). An unknown name is taken as a custom track's id."""
+    try:
+        resolved = default_catalog().resolve(name)
+    except UnknownTrackError as error:
+        if error.ambiguous or error.candidates:
+            raise InvalidQuery(str(error)) from None
+        return default_board_id(name.strip(), "cw" if clockwise else None, race_type)
+    direction = "cw" if clockwise else resolved.direction
+    return default_board_id(resolved.track_id, direction, race_type)
+
+
+def is_default_board_id(board_id: str) -> bool:
+    """Whether the id is the default board of a catalog track (for any direction and race)."""
+    catalog = default_catalog()
+    for race_suffix in _RACE_SUFFIX.values():
+        for direction in ("_cw", ""):
+            suffix = direction + race_suffix
+            base = board_id[: len(board_id) - len(suffix)] if suffix else board_id
+            if board_id.endswith(suffix) and base and catalog.get(base) is not None:
+                return True
+    return False
+
+
+def default_board(record: Record, now: datetime) -> Board:
+    track = default_catalog().get(record.track)
+    name = track.display_name if track else record.track
+    clockwise = record.direction == "cw"
+    return Board(
+        board_id=default_board_id(record.track, record.direction, record.race_type),
+        track=record.track,
+        direction="cw" if clockwise else None,
+        race_type=record.race_type,
+        title=name + (" (clockwise)" if clockwise else "") + _RACE_TITLE[record.race_type],
+        rules=BoardRules(),
+        created_at=now,
+    )
+
+
+def spec_track(spec: BoardSpec) -> tuple[str, Literal["cw", "ccw"] | None]:
+    if spec.custom_track:
+        return spec.track, "cw" if spec.clockwise else None
+    try:
+        resolved = default_catalog().resolve(spec.track)
+    except UnknownTrackError as error:
+        raise InvalidQuery(f"{error} (a track of your own: set custom_track)") from None
+    clockwise = spec.clockwise or resolved.direction == "cw"
+    return resolved.track_id, "cw" if clockwise else None
+
+
+def valid_board(**fields: Any) -> Board:
+    try:
+        return Board.model_validate(fields)
+    except ValidationError as error:
+        problems = [{"loc": field_path(e["loc"]) or "board", "msg": e["msg"].removeprefix(
+            "Value error, "), "type": e["type"]} for e in error.errors()]
+        raise InvalidQuery(problems[0]["msg"] if len(problems) == 1 else "invalid board",
+                           detail=problems) from None
+
+
+def check_open(board: Board, now: datetime) -> None:
+    status = board.status(now)
+    if status is BoardStatus.UPCOMING:
+        raise BoardClosed(f"{board.board_id!r} is not open yet: it opens at {display.when(board.opens_at)}")
+    if status is BoardStatus.CLOSED:
+        raise BoardClosed(f"{board.board_id!r} is closed: it closed at {display.when(board.closes_at)}")
+
+
+def check_not_deleted(board: Board) -> None:
+    if board.deleted_at is not None:
+        raise BoardNotFound(f"board {board.board_id!r} was deleted (an organiser can bring it "
+                            f"back with `drboard board restore {board.board_id}`)")
+
+
+def check_belongs(record: Record, board: Board) -> None:
+    problem = {
+        "track": f"the run is on {record.track}, the board on {board.track}",
+        "direction": "the run and the board differ in direction",
+        "race_type": f"the run is {record.race_type.value}, the board {board.race_type.value}",
+    }
+    problems = [problem[field] for field in
+                run_mismatches(record.track, record.direction, record.race_type, board)]
+    if problems:
+        raise BoardMismatch(f"this run does not belong on {board.board_id!r}: "
+                            + "; ".join(problems))
+
+
+def live(board_id: str, stored: StoredBoard | None) -> StoredBoard:
+    """The board, unless there is none or it was deleted."""
+    if stored is None:
+        raise BoardNotFound(f"no board {board_id!r} (no run has been pushed to it yet)")
+    check_not_deleted(stored.board)
+    return stored
+
+
+def event_id(at: datetime) -> str:
+    """Unique, and in time order: the moment, then random digits."""
+    return f"{ranking.timestamp(at)}-{secrets.token_hex(4)}"
+
+
+class BoardKeeper:
+    """The store and the clock every part of the service shares, and the board lookups and
+    audit trail they all use."""
+
+    def __init__(self, store: BoardStore, clock: Clock) -> None:
+        self.store = store
+        self.clock = clock
+
+    def require(self, board_id: str) -> StoredBoard:
+        return live(board_id, self.store.get_board(board_id))
+
+    def named(self, board_id: str) -> StoredBoard:
+        stored = self.require(board_id)
+        if stored.board.kind != "named":
+            raise BoardLocked(f"{board_id!r} is a track's default board: it keeps the default "
+                              "rules and cannot be changed; create a named board for your race")
+        return stored
+
+    def for_record(self, record: Record, board_id: str | None, now: datetime) -> StoredBoard:
+        """The board a run is pushed to (its track's default board unless named), made by the
+        run's push if it is the default board and does not exist yet."""
+        default = default_board(record, now)
+        board_id = board_id or default.board_id
+        stored = self.store.get_board(board_id)
+        if stored is None:
+            if board_id != default.board_id:
+                raise BoardNotFound(
+                    f"no board {board_id!r}; this run belongs on {default.board_id!r}")
+            stored = self.store.create_board(default)
+        check_not_deleted(stored.board)
+        check_belongs(record, stored.board)
+        return stored
+
+    def view(self, stored: StoredBoard) -> BoardView:
+        return board_view(stored, self.clock())
+
+    def leader(self, board_id: str) -> Entry | None:
+        top = self.store.top(board_id, 1)
+        return top[0] if top else None
+
+    def save(self, board: Board, only_if_empty: bool = False) -> BoardView:
+        try:
+            stored = self.store.update_board(board, only_if_empty=only_if_empty)
+        except BoardHasEntries:
+            raise BoardLocked(LOCKED.format(board.board_id)) from None
+        except KeyError:
+            raise BoardNotFound(f"no board {board.board_id!r}") from None
+        return self.view(stored)
+
+    def event(self, board_id: str, action: AuditAction, caller: Caller | None, at: datetime,
+              **details: Any) -> AuditEvent:
+        who = caller or Caller(principal="anonymous")
+        return AuditEvent(board_id=board_id, at=at, action=action, actor=who.principal,
+                          actor_name=who.name, event_id=event_id(at), **details)
+
+    def audit(self, board_id: str, action: AuditAction, caller: Caller | None,
+              **details: Any) -> None:
+        self.store.append_audit(self.event(board_id, action, caller, self.clock(), **details))

@@ -1,0 +1,173 @@
+"""How the board's things are written as DynamoDB items, and read back.
+
+Items of a board share its partition (``board``); the sort key ``sk`` tells them apart:
+
+- ``#BOARD``: the board (its JSON in ``data``, ``participants``, ``board_version``, and
+  ``board_kind="board"`` for the sparse ``boards`` index that lists boards). Its ``rank_key``
+  is ``#BOARD`` too, which sorts before every entry's, so one Query of ``by_rank`` reads the
+  board and its first page together;
+- ``R#<racer_key>``: a racer's entry, their best (``data``, ``score_key``, and ``rank_key`` for
+  the sparse local index ``by_rank``: the top N is one Query reading N items);
+- ``P#<racer_key>``: the racer's tally on the board (``submissions``, ``last_at``), which the
+  board's submission limits are checked against in the push transaction;
+- ``S#<racer_key>#<submission_id>``: one submission, small (``data``, and ``history_racer``/
+  ``submitted_at`` for the sparse ``by_racer`` index that gives a racer's history across boards);
+- ``D#<submission_id>``: the submission's full record, zlib-compressed in ``record``. It sits
+  apart from the submission because ``get_record`` knows the submission id but not the racer, and
+  so that history reads stay small; it carries no index attribute, so no index copies it;
+- ``F#<fingerprint>``: an evaluation's content on the board, and the racer (``racer_key``) who
+  pushed it first: a copy under another racer fails the push transaction;
+- ``A#<event_id>``: one audit event (``data``), written once and never changed;
+- ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``).
+
+Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
+holds an alias's claim and ``P#<principal>`` the same claim by its sign-in.
+"""
+
+from __future__ import annotations
+
+import zlib
+from typing import TYPE_CHECKING
+
+from drboard_assembler.record import Record
+
+from ... import ranking
+from ...models.domain import AliasClaim, AuditEvent, Board, Entry, Submission
+from ..base import StoredBoard
+
+if TYPE_CHECKING:
+    from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef
+
+    Item = dict[str, AttributeValueTypeDef]
+
+BOARD_SK = "#BOARD"
+ALIAS_PARTITION = "#ALIAS"
+FIRST_ENTRY = "0"  # every entry's rank key sorts after this, the board's before it
+BOARD_KIND = "board"
+RANK_INDEX = "by_rank"
+RACER_INDEX = "by_racer"
+BOARDS_INDEX = "boards"
+COUNT_PREFIX = "c:"
+
+
+def entry_sk(racer_key: str) -> str:
+    return f"R#{racer_key}"
+
+
+def submission_sk(racer_key: str, submission_id: str) -> str:
+    return f"S#{racer_key}#{submission_id}"
+
+
+def record_sk(submission_id: str) -> str:
+    return f"D#{submission_id}"
+
+
+def tally_sk(racer_key: str) -> str:
+    return f"P#{racer_key}"
+
+
+def fingerprint_sk(fingerprint: str) -> str:
+    return f"F#{fingerprint}"
+
+
+def audit_sk(event_id: str) -> str:
+    return f"A#{event_id}"
+
+
+def counter_sk(generation: str, node: str) -> str:
+    return f"#RANK#{generation}#{node}"
+
+
+def text(value: str) -> AttributeValueTypeDef:
+    return {"S": value}
+
+
+def key(board_id: str, sk: str) -> dict[str, AttributeValueTypeDef]:
+    return {"board": text(board_id), "sk": text(sk)}
+
+
+# ---- items -----------------------------------------------------------------------------------
+
+def board_item(board: Board) -> Item:
+    """A board without rank counters (as boards were before them); what a bulk loader writes
+    directly, before ``build_rank_counters``."""
+    return {"board": text(board.board_id), "sk": text(BOARD_SK), "board_kind": text(BOARD_KIND),
+            "rank_key": text(BOARD_SK), "data": text(board.model_dump_json()),
+            "participants": {"N": "0"}}
+
+
+def entry_item(entry: Entry) -> Item:
+    """An entry as stored; also what a bulk loader (the benchmark) writes directly."""
+    return {"board": text(entry.board_id), "sk": text(entry_sk(entry.racer_key)),
+            "rank_key": text(entry.rank_key), "score_key": text(entry.score_key),
+            "data": text(entry.model_dump_json())}
+
+
+def counter_item(board_id: str, generation: str, node: str, counts: dict[str, int]) -> Item:
+    item: Item = {"board": text(board_id), "sk": text(counter_sk(generation, node))}
+    item.update({COUNT_PREFIX + child: {"N": str(n)} for child, n in counts.items()})
+    return item
+
+
+def submission_item(submission: Submission) -> Item:
+    return {
+        "board": text(submission.board_id),
+        "sk": text(submission_sk(submission.racer_key, submission.submission_id)),
+        "history_racer": text(submission.racer_key),
+        "submitted_at": text(ranking.timestamp(submission.submitted_at)),
+        "data": text(submission.model_dump_json()),
+    }
+
+
+def audit_item(event: AuditEvent) -> Item:
+    return {"board": text(event.board_id), "sk": text(audit_sk(event.event_id)),
+            "data": text(event.model_dump_json())}
+
+
+def alias_items(claim: AliasClaim) -> list[Item]:
+    data = text(claim.model_dump_json())
+    return [{"board": text(ALIAS_PARTITION), "sk": text(f"K#{claim.racer_key}"), "data": data},
+            {"board": text(ALIAS_PARTITION), "sk": text(f"P#{claim.principal}"), "data": data}]
+
+
+def record_item(board_id: str, record: Record) -> Item:
+    return {"board": text(board_id), "sk": text(record_sk(record.submission_id)),
+            "record": {"B": zlib.compress(record.model_dump_json().encode())}}
+
+
+def fingerprint_item(board_id: str, fingerprint: str, racer_key: str) -> Item:
+    return {"board": text(board_id), "sk": text(fingerprint_sk(fingerprint)),
+            "racer_key": text(racer_key)}
+
+
+# ---- reading items back ------------------------------------------------------------------------
+
+def stored_board(item: Item) -> StoredBoard:
+    return StoredBoard(Board.model_validate_json(item["data"]["S"]), int(item["participants"]["N"]),
+                       int(item.get("board_version", {"N": "0"})["N"]))
+
+
+def entry_of(item: Item) -> Entry:
+    return Entry.model_validate_json(item["data"]["S"])
+
+
+def submission_of(item: Item) -> Submission:
+    return Submission.model_validate_json(item["data"]["S"])
+
+
+def claim_of(item: Item) -> AliasClaim:
+    return AliasClaim.model_validate_json(item["data"]["S"])
+
+
+def audit_event_of(item: Item) -> AuditEvent:
+    return AuditEvent.model_validate_json(item["data"]["S"])
+
+
+def record_json(item: Item) -> bytes:
+    return zlib.decompress(item["record"]["B"])
+
+
+def counts(item: Item | None) -> dict[str, int]:
+    """A counter item's counts by child; no item, no entries."""
+    return {name[len(COUNT_PREFIX):]: int(value["N"]) for name, value in (item or {}).items()
+            if name.startswith(COUNT_PREFIX) and "N" in value}

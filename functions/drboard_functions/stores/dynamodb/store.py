@@ -1,0 +1,444 @@
+"""The cloud board: one DynamoDB table (its one definition is ``BoardTable`` in template.yaml).
+
+How each thing is kept as an item is in ``codecs.py``; a push's transaction in
+``transaction.py``; the rank counters in ``ranks.py``. Aliases are claimed in one transaction
+that writes the alias's item and its sign-in's on condition that neither exists. Only this
+package talks to DynamoDB.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from typing import TYPE_CHECKING, Any
+
+import boto3
+from botocore.exceptions import ClientError
+from drboard_assembler.record import Record
+
+from ... import ranking
+from ...errors import StoreBusy
+from ...models.domain import (
+    AliasClaim,
+    AuditEvent,
+    Board,
+    Entry,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    WriteOutcome,
+)
+from ..aws_errors import cancellation_codes, code_of, translating
+from ..base import (
+    AliasConflict,
+    AuditSlice,
+    BoardHasEntries,
+    BoardSlice,
+    HistorySlice,
+    RankBuild,
+    StoredBoard,
+    StoredSubmissionPage,
+    SubmissionPage,
+    page_token,
+    read_page_token,
+    stored_record,
+)
+from .codecs import (
+    ALIAS_PARTITION,
+    BOARD_KIND,
+    BOARD_SK,
+    BOARDS_INDEX,
+    FIRST_ENTRY,
+    RACER_INDEX,
+    RANK_INDEX,
+    alias_items,
+    audit_event_of,
+    audit_item,
+    audit_sk,
+    board_item,
+    claim_of,
+    entry_item,
+    entry_of,
+    entry_sk,
+    key,
+    record_json,
+    record_sk,
+    stored_board,
+    submission_of,
+    submission_sk,
+    tally_sk,
+    text,
+)
+from .ranks import FIRST_GENERATION, RankCounters
+from .retries import MAX_ATTEMPTS, backoff
+from .transaction import PushTransaction
+
+if TYPE_CHECKING:
+    from mypy_boto3_dynamodb.client import DynamoDBClient
+    from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef, QueryInputTypeDef
+
+    from .codecs import Item
+
+BATCH_GET_KEYS = 100
+
+
+@translating("the board's table")
+class DynamoDbStore:
+    """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
+    same board, raise StoreBusy; a timeout or a lost connection StoreUnavailable (nothing
+    written either way)."""
+
+    def __init__(self, table_name: str, client: DynamoDBClient | None = None) -> None:
+        self.table = table_name
+        self.client: DynamoDBClient = client if client is not None else boto3.client("dynamodb")
+        self.ranks = RankCounters(self.client, table_name)
+
+    # ---- boards ---------------------------------------------------------------------------
+
+    def get_board(self, board_id: str) -> StoredBoard | None:
+        item = self.get_item(board_id, BOARD_SK)
+        return stored_board(item) if item else None
+
+    def create_board(self, board: Board) -> StoredBoard:
+        try:
+            self.client.put_item(
+                TableName=self.table, ConditionExpression="attribute_not_exists(sk)",
+                Item=board_item(board) | {"rank_generation": text(FIRST_GENERATION)})
+        except ClientError as error:
+            if code_of(error) != "ConditionalCheckFailedException":
+                raise
+        stored = self.get_board(board.board_id)
+        assert stored is not None
+        return stored
+
+    def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
+        condition = "attribute_exists(sk)"
+        values: dict[str, AttributeValueTypeDef] = {":data": text(board.model_dump_json()),
+                                                    ":one": {"N": "1"}}
+        if only_if_empty:
+            condition += " AND participants = :none"
+            values[":none"] = {"N": "0"}
+        try:
+            self.client.update_item(
+                TableName=self.table, Key=key(board.board_id, BOARD_SK),
+                UpdateExpression="SET #data = :data ADD board_version :one", ConditionExpression=condition,
+                ExpressionAttributeNames={"#data": "data"}, ExpressionAttributeValues=values)
+        except ClientError as error:
+            if code_of(error) != "ConditionalCheckFailedException":
+                raise
+            if self.get_board(board.board_id) is None:
+                raise KeyError(board.board_id) from None
+            raise BoardHasEntries(board.board_id) from None
+        stored = self.get_board(board.board_id)
+        assert stored is not None
+        return stored
+
+    def list_boards(self) -> list[StoredBoard]:
+        items = self._query({
+            "TableName": self.table, "IndexName": BOARDS_INDEX,
+            "KeyConditionExpression": "board_kind = :kind",
+            "ExpressionAttributeValues": {":kind": text(BOARD_KIND)},
+        })
+        return [stored_board(item) for item in items]
+
+    def boards_page(self, after: str | None, limit: int) -> BoardSlice:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": BOARDS_INDEX,
+            "KeyConditionExpression": "board_kind = :kind",
+            "ExpressionAttributeValues": {":kind": text(BOARD_KIND)},
+        }
+        if after is not None:
+            [board_id] = read_page_token(after, 1)
+            request["ExclusiveStartKey"] = {"board_kind": text(BOARD_KIND), "board": text(board_id),
+                                            "sk": text(BOARD_SK)}
+        items, more = self._page(request, limit)
+        return BoardSlice([stored_board(item) for item in items],
+                          page_token([items[-1]["board"]["S"]]) if more else None)
+
+    # ---- submissions ----------------------------------------------------------------------
+
+    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+                          limits: SubmissionLimits | None = None,
+                          fingerprints: Sequence[str] = (),
+                          audit: AuditEvent | None = None) -> WriteOutcome:
+        return PushTransaction(self, submission, record, entry, limits, fingerprints, audit).run()
+
+    # ---- moderation and audit -------------------------------------------------------------
+
+    def remove_entry(self, board_id: str, racer_key: str) -> Entry | None:
+        for attempt in range(MAX_ATTEMPTS):
+            if attempt:
+                backoff(attempt)
+            current = self.get_entry(board_id, racer_key)
+            if current is None:
+                return None
+            state = self.ranks.state(board_id)
+            try:
+                self.client.transact_write_items(TransactItems=[
+                    {"Delete": {"TableName": self.table, "Key": key(board_id, entry_sk(racer_key)),
+                                "ConditionExpression": "rank_key = :seen",
+                                "ExpressionAttributeValues": {":seen": text(current.rank_key)}}},
+                    self.ranks.board_change(board_id, -1, state),
+                    *self.ranks.changes(board_id, state, None, current)])
+            except ClientError as error:
+                if code_of(error) != "TransactionCanceledException":
+                    raise
+                continue  # the entry improved, or the counters were built, meanwhile: look again
+            return current
+        raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up removing the entry; "
+                        "try again in a moment")
+
+    def restore_entry(self, entry: Entry) -> None:
+        for attempt in range(MAX_ATTEMPTS):
+            if attempt:
+                backoff(attempt)
+            state = self.ranks.state(entry.board_id)
+            if not state.exists:
+                return
+            try:
+                self.client.transact_write_items(TransactItems=[
+                    {"Put": {"TableName": self.table, "Item": entry_item(entry),
+                             "ConditionExpression": "attribute_not_exists(sk)"}},
+                    self.ranks.board_change(entry.board_id, +1, state),
+                    *self.ranks.changes(entry.board_id, state, entry, None)])
+            except ClientError as error:
+                if code_of(error) != "TransactionCanceledException":
+                    raise
+                if cancellation_codes(error)[:1] == ["ConditionalCheckFailed"]:
+                    return  # the racer has an entry again, from a push meanwhile
+                continue  # the counters were built meanwhile, or another write was under way
+            return
+        raise StoreBusy(f"{entry.board_id!r} is busy with other pushes: gave up restoring the entry; "
+                        "try again in a moment")
+
+    def build_rank_counters(self, board_id: str, budget_s: float | None = None) -> RankBuild:
+        """Count the entries of a board from before the rank counters into its counters (see
+        ``RankCounters.build``)."""
+        return self.ranks.build(board_id, budget_s=budget_s)
+
+    def append_audit(self, event: AuditEvent) -> None:
+        self.client.put_item(TableName=self.table, Item=audit_item(event),
+                             ConditionExpression="attribute_not_exists(sk)")
+
+    def audit(self, board_id: str, after: str | None, limit: int) -> AuditSlice:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":board": text(board_id), ":prefix": text(audit_sk(""))},
+            "ProjectionExpression": "#data", "ExpressionAttributeNames": {"#data": "data"},
+        }
+        if after is not None:
+            request["ExclusiveStartKey"] = {"board": text(board_id), "sk": text(audit_sk(after))}
+        events = [audit_event_of(item)
+                  for item in self._query(request, limit=limit)]
+        return AuditSlice(events, events[-1].event_id if len(events) == limit else None)
+
+    # ---- aliases --------------------------------------------------------------------------
+
+    def claim_alias(self, claim: AliasClaim) -> AliasClaim:
+        try:
+            self.client.transact_write_items(TransactItems=[
+                {"Put": {"TableName": self.table, "Item": item,
+                         "ConditionExpression": "attribute_not_exists(sk)"}}
+                for item in alias_items(claim)])
+        except ClientError as error:
+            if code_of(error) != "TransactionCanceledException":
+                raise
+            for holder in (self.alias_holder(claim.racer_key), self.alias_of(claim.principal)):
+                if holder is None:
+                    continue
+                if (holder.racer_key, holder.principal) == (claim.racer_key, claim.principal):
+                    return holder
+                raise AliasConflict(holder) from None
+            raise  # pragma: no cover - cancelled, yet neither item exists
+        return claim
+
+    def alias_of(self, principal: str) -> AliasClaim | None:
+        item = self.get_item(ALIAS_PARTITION, f"P#{principal}")
+        return claim_of(item) if item else None
+
+    def alias_holder(self, racer_key: str) -> AliasClaim | None:
+        item = self.get_item(ALIAS_PARTITION, f"K#{racer_key}")
+        return claim_of(item) if item else None
+
+    # ---- reads ----------------------------------------------------------------------------
+
+    def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
+        item = self.get_item(board_id, submission_sk(racer_key, submission_id))
+        return submission_of(item) if item else None
+
+    def tally(self, board_id: str, racer_key: str) -> RacerTally:
+        item = self.get_item(board_id, tally_sk(racer_key))
+        if not item:
+            return RacerTally()
+        last = item.get("last_at")
+        return RacerTally(submissions=int(item["submissions"]["N"]),
+                          last_submitted_at=ranking.parse_timestamp(last["S"]) if last else None)
+
+    def submissions(self, board_id: str, after: str | None, limit: int) -> SubmissionPage:
+        page = self.stored_submissions(board_id, after, limit)
+        return SubmissionPage([(s, stored_record(raw)) for s, raw in page.submissions], page.after)
+
+    def stored_submissions(self, board_id: str, after: str | None, limit: int) -> StoredSubmissionPage:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "ConsistentRead": True, "Limit": limit,
+            "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":board": text(board_id), ":prefix": text("S#")},
+            "ProjectionExpression": "sk, #data", "ExpressionAttributeNames": {"#data": "data"},
+        }
+        if after is not None:
+            request["ExclusiveStartKey"] = {"board": text(board_id), "sk": text(after)}
+        page = self.client.query(**request)
+        submissions = [submission_of(item) for item in page["Items"]]
+        records = self._records(board_id, [s.submission_id for s in submissions])
+        pairs: list[tuple[Submission, str | bytes]] = [
+            (s, records[s.submission_id]) for s in submissions if s.submission_id in records]
+        more = page.get("LastEvaluatedKey") and page["Items"]
+        return StoredSubmissionPage(pairs, page["Items"][-1]["sk"]["S"] if more else None)
+
+    def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, bytes]:
+        """The records' JSON, as stored, by submission id."""
+        records: dict[str, bytes] = {}
+        keys = [{"board": text(board_id), "sk": text(record_sk(i))} for i in dict.fromkeys(submission_ids)]
+        for start in range(0, len(keys), BATCH_GET_KEYS):
+            pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
+                                         "ConsistentRead": True}}
+            attempt = 0
+            while pending:
+                if attempt:
+                    backoff(attempt)
+                answer = self.client.batch_get_item(RequestItems=pending)
+                for item in answer["Responses"].get(self.table, []):
+                    submission_id = item["sk"]["S"].removeprefix(record_sk(""))
+                    records[submission_id] = record_json(item)
+                pending = answer.get("UnprocessedKeys") or None
+                attempt += 1
+        return records
+
+    def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :board",
+            "ExpressionAttributeValues": {":board": text(board_id)},
+            "ProjectionExpression": "sk, #data, participants, board_version",
+            "ExpressionAttributeNames": {"#data": "data"},
+        }
+        items = self._query(request, limit=limit + 1)
+        if not items or items[0]["sk"]["S"] != BOARD_SK:
+            return None, []
+        return stored_board(items[0]), [entry_of(i) for i in items[1:]]
+
+    def top(self, board_id: str, limit: int, after: str | None = None) -> list[Entry]:
+        condition = "board = :board AND rank_key > :after"
+        values: dict[str, AttributeValueTypeDef] = {
+            ":board": text(board_id), ":after": text(FIRST_ENTRY if after is None else after)}
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
+            "KeyConditionExpression": condition, "ExpressionAttributeValues": values,
+            "ProjectionExpression": "#data", "ExpressionAttributeNames": {"#data": "data"},
+        }
+        return [entry_of(item)
+                for item in self._query(request, limit=limit)]
+
+    def get_entry(self, board_id: str, racer_key: str) -> Entry | None:
+        item = self.get_item(board_id, entry_sk(racer_key))
+        return entry_of(item) if item else None
+
+    def count_better(self, board_id: str, score_key: str) -> int:
+        return self.ranks.count_better(board_id, score_key)
+
+    def history(self, racer_key: str, board_id: str | None = None) -> list[Submission]:
+        names = {"#data": "data"}
+        if board_id is None:
+            request: QueryInputTypeDef = {
+                "TableName": self.table, "IndexName": RACER_INDEX,
+                "KeyConditionExpression": "history_racer = :racer",
+                "ExpressionAttributeValues": {":racer": text(racer_key)},
+                "ProjectionExpression": "#data", "ExpressionAttributeNames": names,
+            }
+        else:
+            request = {
+                "TableName": self.table, "ConsistentRead": True,
+                "KeyConditionExpression": "board = :board AND begins_with(sk, :prefix)",
+                "ExpressionAttributeValues": {":board": text(board_id),
+                                              ":prefix": text(submission_sk(racer_key, ""))},
+                "ProjectionExpression": "#data", "ExpressionAttributeNames": names,
+            }
+        submissions = [submission_of(item)
+                       for item in self._query(request)]
+        # A racer key may itself contain "#": keep only this racer's own submissions.
+        mine = [s for s in submissions if s.racer_key == racer_key]
+        return sorted(mine, key=lambda s: (s.submitted_at, s.board_id, s.submission_id))
+
+    def history_page(self, racer_key: str, board_id: str | None, after: str | None,
+                     limit: int) -> HistorySlice:
+        # The racer index holds every submission by time, on every board; one board's are
+        # filtered from it, so the page stays in time order.
+        values: dict[str, AttributeValueTypeDef] = {":racer": text(racer_key)}
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "IndexName": RACER_INDEX,
+            "KeyConditionExpression": "history_racer = :racer",
+            "ExpressionAttributeValues": values,
+            "ProjectionExpression": "board, sk, submitted_at, #data",
+            "ExpressionAttributeNames": {"#data": "data"},
+        }
+        if board_id is not None:
+            request["FilterExpression"] = "board = :board"
+            values[":board"] = text(board_id)
+        if after is not None:
+            submitted_at, board, sk = read_page_token(after, 3)
+            request["ExclusiveStartKey"] = {"history_racer": text(racer_key),
+                                            "submitted_at": text(submitted_at),
+                                            "board": text(board), "sk": text(sk)}
+        items, more = self._page(request, limit)
+        last = items[-1] if items else None
+        token = page_token([last["submitted_at"]["S"], last["board"]["S"], last["sk"]["S"]]) \
+            if more and last else None
+        return HistorySlice([submission_of(item) for item in items],
+                            token)
+
+    def get_record(self, board_id: str, submission_id: str) -> Record | None:
+        item = self.get_item(board_id, record_sk(submission_id))
+        return Record.model_validate_json(record_json(item)) if item else None
+
+    # ---- plumbing -------------------------------------------------------------------------
+
+    def get_item(self, board_id: str, sk: str) -> Item | None:
+        response = self.client.get_item(TableName=self.table, ConsistentRead=True,
+                                        Key=key(board_id, sk))
+        return response.get("Item")
+
+    def _pages(self, request: QueryInputTypeDef, limit: int | None = None) -> Iterator[Any]:
+        """Query pages until ``limit`` items (or all of them) are read."""
+        request = request.copy()
+        seen = 0
+        while True:
+            if limit is not None:
+                request["Limit"] = limit - seen
+            page = self.client.query(**request)
+            yield page
+            seen += page["Count"]
+            last = page.get("LastEvaluatedKey")
+            if not last or (limit is not None and seen >= limit):
+                return
+            request["ExclusiveStartKey"] = last
+
+    def _page(self, request: QueryInputTypeDef, limit: int) -> tuple[list[Item], bool]:
+        """Up to ``limit`` items the query (and its filter) selects, and whether there are
+        more: pages are read until the limit is reached or the query ends."""
+        request = request.copy()
+        items: list[Item] = []
+        while True:
+            request["Limit"] = limit + 1 - len(items)
+            page = self.client.query(**request)
+            items.extend(page["Items"])
+            last = page.get("LastEvaluatedKey")
+            if len(items) > limit:
+                return items[:limit], True
+            if not last:
+                return items, False
+            request["ExclusiveStartKey"] = last
+
+    def _query(self, request: QueryInputTypeDef, limit: int | None = None) -> list[Item]:
+        return [item for page in self._pages(request, limit) for item in page["Items"]]
+
+
