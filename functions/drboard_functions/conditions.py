@@ -44,8 +44,14 @@ def unmet(required: BoardConditions | None, stated: Conditions | None) -> list[s
     if required is None:
         return []
     have = stated.stated() if stated is not None else {}
-    return [f"{condition_text(name, have.get(name))} (the board requires {value_text(name, wanted)})"
+    return [f"{_as_stated(name, have.get(name))} (the board requires {value_text(name, wanted)})"
             for name, wanted in required.required().items() if not _same(have.get(name), wanted)]
+
+
+def _as_stated(name: str, value: Any) -> str:
+    if value is None:
+        return f"{LABELS[name]} not stated by its evaluation parameters"
+    return condition_text(name, value)
 
 
 def meets(required: BoardConditions | None, run: EvaluationRun) -> bool:
