@@ -20,8 +20,9 @@ from pydantic import ValidationError
 
 from . import __version__, limits
 from .archive import is_archive, unpack
+from .catalog import ResolvedTrack
 from .choice import Model, choose_model, model_folder
-from .design import NamedFile, build_design, metadata_facts, printed_facts
+from .design import Facts, NamedFile, build_design, metadata_facts, printed_facts
 from .errors import AssemblyError
 from .evaluations import Run, collect_runs, only_evaluation
 from .identity import Identity, Overrides, choose_track, first_text, identify, names_track, training_track
@@ -138,16 +139,23 @@ def _evaluations(files: RunFiles, inputs: Inputs, model: Model, reader: Reader, 
     runs = collect_runs(files, inputs, model, reader, job.evaluation)
     if not runs:
         raise _no_evaluation(inputs, job.where)
-    track = choose_track(_describing(runs, inputs), job.overrides)
-    kept = [run for run in runs if track is None or run.params is None or names_track(run.params, track)]
-    if not kept and track is not None:
-        worlds = sorted({world for run in runs
-                         if run.params is not None and (world := run.params.text("WORLD_NAME"))})
-        raise AssemblyError(job.where, "WORLD_NAME", f"no evaluation ran on {track.track_id}; the "
-                            f"evaluation parameters name {', '.join(worlds)}", flag="--track")
+    kept = _on_the_track(runs, choose_track(_describing(runs, inputs), job.overrides), job.where)
     if len(kept) > limits.MAX_EVALUATION_RUNS:
         raise AssemblyError(job.where, "evaluation metrics", f"{len(kept)} evaluation runs, over the "
                             f"limit of {limits.MAX_EVALUATION_RUNS}")
+    return kept
+
+
+def _on_the_track(runs: list[Run], track: ResolvedTrack | None, where: str) -> list[Run]:
+    """The runs on the chosen track (all of them when no track is chosen yet)."""
+    if track is None:
+        return runs
+    kept = [run for run in runs if run.params is None or names_track(run.params, track)]
+    if not kept:
+        worlds = sorted({world for run in runs
+                         if run.params is not None and (world := run.params.text("WORLD_NAME"))})
+        raise AssemblyError(where, "WORLD_NAME", f"no evaluation ran on {track.track_id}; the "
+                            f"evaluation parameters name {', '.join(worlds)}", flag="--track")
     return kept
 
 
@@ -175,18 +183,29 @@ def _no_evaluation(inputs: Inputs, where: str) -> AssemblyError:
 
 def _design(files: RunFiles, inputs: Inputs, model: Model, runs: list[Run], reader: Reader) -> Design:
     metadata = _metadata(model, reader)
-    evaluated = next((facts for run in runs if run.log is not None
-                      and (facts := printed_facts(run.log)) is not None), None)
-    training_logs = [log for log in inputs.logs
-                     if log.job == "training" and model.owns(files.root / log.name)]
-    trained = next((facts for log in training_logs if (facts := printed_facts(log)) is not None), None)
-    hyper_path = shallowest(model.own(files.hyperparameters), files.root)
-    hyper = reader.load(hyper_path, limits.MAX_SMALL_FILE_BYTES) if hyper_path is not None else None
-    design = build_design(metadata_facts(_named(metadata)) if metadata else None, evaluated, trained,
-                          _named(hyper) if hyper else None,
+    hyper = _hyperparameters_file(files, model, reader)
+    training_logs = _training_logs(files, inputs, model)
+    design = build_design(metadata_facts(_named(metadata)) if metadata else None,
+                          _first_printed([run.log for run in runs if run.log is not None]),
+                          _first_printed(training_logs), _named(hyper) if hyper else None,
                           next((log for log in training_logs if log.hyperparameters is not None), None))
     _use_sources(design, [read for read in (metadata, hyper) if read is not None], inputs.logs, reader)
     return design
+
+
+def _training_logs(files: RunFiles, inputs: Inputs, model: Model) -> list[JobLog]:
+    """The logs of the evaluated model's training jobs."""
+    return [log for log in inputs.logs if log.job == "training" and model.owns(files.root / log.name)]
+
+
+def _hyperparameters_file(files: RunFiles, model: Model, reader: Reader) -> Loaded | None:
+    path = shallowest(model.own(files.hyperparameters), files.root)
+    return reader.load(path, limits.MAX_SMALL_FILE_BYTES) if path is not None else None
+
+
+def _first_printed(logs: list[JobLog]) -> Facts | None:
+    """What the first of the logs that printed anything of its model printed of it."""
+    return next((facts for log in logs if (facts := printed_facts(log)) is not None), None)
 
 
 def _metadata(model: Model, reader: Reader) -> Loaded | None:

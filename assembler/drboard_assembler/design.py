@@ -145,29 +145,20 @@ def _ranges(space: ActionSpace) -> tuple[float, ...]:
                                                space.steering_angle.low, space.steering_angle.high))
 
 
+#: The facts a model's metadata (or what a job printed of it) states.
+_DESCRIBED = ("algorithm", "action_space", "sensors", "neural_network", "metadata_version")
+
+
 def build_design(model: Facts | None, evaluated: Facts | None, trained: Facts | None,
                  hyperparameters: NamedFile | None, training_log: JobLog | None) -> Design:
     """The design from the model's metadata, what its evaluation printed, what its training
     printed, and its hyperparameters (a file, or a training log's block)."""
     facts = _described_by(model, evaluated, trained)
+    values = {name: getattr(facts, name) if facts else None for name in _DESCRIBED}
+    sources = {name: facts.source if facts and value is not None else None for name, value in values.items()}
     hyper, hyper_source = _hyperparameters_of(hyperparameters, training_log)
-    sources = DesignSources(
-        algorithm=facts.source if facts and facts.algorithm else None,
-        action_space=facts.source if facts and facts.action_space else None,
-        sensors=facts.source if facts and facts.sensors is not None else None,
-        neural_network=facts.source if facts and facts.neural_network else None,
-        metadata_version=facts.source if facts and facts.metadata_version else None,
-        hyperparameters=hyper_source,
-    )
-    return Design(
-        algorithm=facts.algorithm if facts else None,
-        action_space=facts.action_space if facts else None,
-        sensors=facts.sensors if facts else None,
-        neural_network=facts.neural_network if facts else None,
-        metadata_version=facts.metadata_version if facts else None,
-        hyperparameters=hyper,
-        sources=sources,
-    )
+    return Design.model_validate({**values, "hyperparameters": hyper,
+                                  "sources": DesignSources(**sources, hyperparameters=hyper_source)})
 
 
 def _described_by(model: Facts | None, evaluated: Facts | None, trained: Facts | None) -> Facts | None:

@@ -82,16 +82,21 @@ def _with_logs(runs: list[Run], logs: list[JobLog], *, present: set[str], logs_a
     run of its own."""
     for log in logs:
         laps = log.laps()
-        free = [i for i, run in enumerate(runs) if run.log is None]
-        index = next((i for i in free if _source_name(runs[i]) == _named_file(log)), None)
-        if index is None:
-            index = next((i for i in free if _wrote(log, laps, runs[i].run)), None)
+        index = _run_of(log, laps, runs)
         if index is not None:
             runs[index] = replace(runs[index], log=log,
                                   params=runs[index].params or _evaluation_params(log))
         elif logs_are_runs and not _names_present_file(log, present):
             runs.append(Run(EvaluationRun.from_laps(log.name, laps), _evaluation_params(log), log))
     return runs
+
+
+def _run_of(log: JobLog, laps: list[Lap], runs: list[Run]) -> int | None:
+    """The run (not joined to a log yet) the log wrote: the one whose file its parameters name,
+    else the one of its laps."""
+    free = [i for i, run in enumerate(runs) if run.log is None]
+    named = next((i for i in free if _source_name(runs[i]) == _named_file(log)), None)
+    return named if named is not None else next((i for i in free if _wrote(log, laps, runs[i].run)), None)
 
 
 def _names_present_file(log: JobLog, present: set[str]) -> bool:
@@ -116,19 +121,30 @@ def _named(runs: list[Run], inputs: Inputs) -> list[Run]:
     """Whether the folder's evaluation parameters name each run's file: a lone params file that
     names no file describes the folder's runs; parameters that name only files the folder does
     not hold describe another run (the board flags it)."""
-    evaluation_params = inputs.evaluation_params
-    named_files = {p.metrics_file for p in evaluation_params if p.metrics_file}
-    described = {_source_name(run) for run in runs if run.params is not None}
-    foreign = bool(named_files) and not named_files & described
-    lone = evaluation_params[0] if len(inputs.params) and len(evaluation_params) == 1 else None
+    foreign = _params_name_other_files(runs, inputs.evaluation_params)
+    lone = _lone_params(inputs)
     named = []
     for run in runs:
         if run.params is not None or foreign:
             run = replace(run, run=run.run.model_copy(update={"named_by_params": run.params is not None}))
-        if run.params is None and lone is not None and lone.metrics_file is None:
+        if run.params is None and lone is not None:
             run = replace(run, params=lone)
         named.append(run)
     return named
+
+
+def _params_name_other_files(runs: list[Run], evaluation_params: list[RunParams]) -> bool:
+    named_files = {p.metrics_file for p in evaluation_params if p.metrics_file}
+    described = {_source_name(run) for run in runs if run.params is not None}
+    return bool(named_files) and not named_files & described
+
+
+def _lone_params(inputs: Inputs) -> RunParams | None:
+    """The folder's one evaluation params file, when it names no metrics file of its own."""
+    evaluation_params = inputs.evaluation_params
+    if not inputs.params or len(evaluation_params) != 1:
+        return None
+    return evaluation_params[0] if evaluation_params[0].metrics_file is None else None
 
 
 def _with_conditions(run: Run) -> Run:

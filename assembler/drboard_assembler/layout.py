@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import re
 import stat
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -75,7 +76,17 @@ def find_run_files(root: Path) -> RunFiles:
     if not root.is_dir():
         raise AssemblyError(str(root), "", "is not a folder or a .tar.gz archive")
     found = RunFiles(root=root)
-    seen = sniffed = 0
+    sniffed = 0
+    for path in _files_of(root):
+        if not _classify_by_name(found, path) and _sniffable(path) and sniffed < limits.MAX_SNIFFED_FILES:
+            sniffed += 1
+            _classify_by_content(found, path)
+    return found
+
+
+def _files_of(root: Path) -> Iterator[Path]:
+    """The run folder's regular files, in name order, leaving out hidden ones."""
+    seen = 0
     for folder, dirs, files in os.walk(root):
         dirs[:] = sorted(d for d in dirs if not d.startswith("."))
         for filename in sorted(files):
@@ -83,12 +94,8 @@ def find_run_files(root: Path) -> RunFiles:
             if seen > limits.MAX_FILES_SCANNED:
                 raise AssemblyError(str(root), "", f"holds more than {limits.MAX_FILES_SCANNED} files")
             path = Path(folder, filename)
-            if filename.startswith(".") or not _regular_file_inside(path, root):
-                continue
-            if not _classify_by_name(found, path) and _sniffable(path) and sniffed < limits.MAX_SNIFFED_FILES:
-                sniffed += 1
-                _classify_by_content(found, path)
-    return found
+            if not filename.startswith(".") and _regular_file_inside(path, root):
+                yield path
 
 
 def evaluation_files(root: Path) -> list[str]:

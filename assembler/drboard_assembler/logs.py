@@ -213,21 +213,13 @@ class _LineReader:
         self.block: list[str] | None = None
 
     def feed(self, line: str) -> None:
-        log = self.log
         if self.block is not None:
             self._hyperparameter_line(line)
         elif line.startswith(_TRACE):
-            _add_step(log, line[len(_TRACE):])
-        elif line.startswith("{'") and "'WORLD_NAME'" in line and log.params is None:
-            values = _literal(line)
-            if isinstance(values, dict):
-                log.params = params_from_values(values, log.name)
-        elif line.startswith(_ACTION_SPACE) and log.action_space is None:
-            log.action_space = _literal(line.split(": ", 1)[1])
-        elif line.strip() == _HYPERPARAMETERS and log.hyperparameters is None:
-            self.block = []
+            _add_step(self.log, line[len(_TRACE):])
         else:
-            self._once_printed(line)
+            any(read(line) for read in (self._params, self._action_space, self._hyperparameters,
+                                        self._sensors, self._ros_param, self._metadata_key, self._job))
 
     def _hyperparameter_line(self, line: str) -> None:
         assert self.block is not None
@@ -236,18 +228,56 @@ class _LineReader:
             self.log.hyperparameters = _json_object("\n".join(self.block))
             self.block = None
 
-    def _once_printed(self, line: str) -> None:
-        log = self.log
-        if (found := _SENSORS.search(line)) and log.sensors is None:
-            sensors = _literal(found[1])
-            log.sensors = [str(s) for s in sensors] if isinstance(sensors, list) else None
-            log.network, log.simapp_version, log.algorithm, log.action_space_type = found.groups()[1:]
-        elif (ros := _ROS_PARAM.match(line)) and len(log.ros_params) < 200:
-            log.ros_params.setdefault(ros["key"], ros["value"].strip()[: limits.MAX_TEXT_CHARS])
-        elif log.metadata_key is None and (key := _METADATA_KEY.search(line)):
-            log.metadata_key = key["key"][: limits.MAX_TEXT_CHARS]
-        elif log.marked_job is None:
-            log.marked_job = next((job for marker, job in _JOB_MARKERS if marker in line), None)
+    # Each reader below takes a line it recognises (and returns True), once its part is read.
+
+    def _params(self, line: str) -> bool:
+        if not (line.startswith("{'") and "'WORLD_NAME'" in line and self.log.params is None):
+            return False
+        values = _literal(line)
+        if isinstance(values, dict):
+            self.log.params = params_from_values(values, self.log.name)
+        return True
+
+    def _action_space(self, line: str) -> bool:
+        if not (line.startswith(_ACTION_SPACE) and self.log.action_space is None):
+            return False
+        self.log.action_space = _literal(line.split(": ", 1)[1])
+        return True
+
+    def _hyperparameters(self, line: str) -> bool:
+        if line.strip() != _HYPERPARAMETERS or self.log.hyperparameters is not None:
+            return False
+        self.block = []
+        return True
+
+    def _sensors(self, line: str) -> bool:
+        found = _SENSORS.search(line) if self.log.sensors is None else None
+        if found is None:
+            return False
+        sensors = _literal(found[1])
+        self.log.sensors = [str(s) for s in sensors] if isinstance(sensors, list) else None
+        self.log.network, self.log.simapp_version, self.log.algorithm, self.log.action_space_type = \
+            found.groups()[1:]
+        return True
+
+    def _ros_param(self, line: str) -> bool:
+        ros = _ROS_PARAM.match(line) if len(self.log.ros_params) < 200 else None
+        if ros is None:
+            return False
+        self.log.ros_params.setdefault(ros["key"], ros["value"].strip()[: limits.MAX_TEXT_CHARS])
+        return True
+
+    def _metadata_key(self, line: str) -> bool:
+        key = _METADATA_KEY.search(line) if self.log.metadata_key is None else None
+        if key is None:
+            return False
+        self.log.metadata_key = key["key"][: limits.MAX_TEXT_CHARS]
+        return True
+
+    def _job(self, line: str) -> bool:
+        if self.log.marked_job is None:
+            self.log.marked_job = next((job for marker, job in _JOB_MARKERS if marker in line), None)
+        return self.log.marked_job is not None
 
 
 def _lines(path: Path, name: str) -> Any:
