@@ -32,7 +32,7 @@ from .logs import JobLog
 from .params import RunParams, load_params
 from .reading import from_validation_error, read_bounded
 from .record import Design, Record, TrainingSummary, implausible_lap
-from .training import load_training
+from .training import coarser, load_training
 
 __all__ = ["Overrides", "assemble", "planned_trials"]
 
@@ -279,6 +279,17 @@ def _distinct_training_files(paths: list[Path], reader: Reader) -> Iterator[tupl
             yield loaded.data, loaded.name
 
 
+def _fitted(record: Record) -> Record:
+    """The record within TARGET_RECORD_BYTES where a coarser training curve makes it fit (many
+    runs and laps may still take it past, up to MAX_RECORD_BYTES)."""
+    while (len(record.model_dump_json()) > limits.TARGET_RECORD_BYTES and record.training is not None
+           and len(record.training.curve) > limits.MIN_CURVE_POINTS):
+        training = record.training.model_copy(update={"curve": coarser(record.training.curve)})
+        fields = record.model_dump(exclude={"submission_id", "training"})
+        record = Record.build(**fields, training=training)
+    return record
+
+
 def _build(files: RunFiles, identity: Identity, runs: list[Run], design: Design,
            training: TrainingSummary | None, reader: Reader, where: str) -> Record:
     fields = {
@@ -296,7 +307,7 @@ def _build(files: RunFiles, identity: Identity, runs: list[Run], design: Design,
         "provenance": reader.provenance,
     }
     try:
-        record = Record.build(**fields)
+        record = _fitted(Record.build(**fields))
     except ValidationError as error:
         raise from_validation_error(error, where) from None
     size = len(record.model_dump_json())

@@ -18,6 +18,8 @@ MAX_TRAINING_ENTRIES = 5_000_000  # entries of all training metrics files togeth
 MAX_TRAINING_S = 366 * 24 * 3600  # a training's span, once its timestamps are checked
 
 MAX_RECORD_BYTES = 64 * KIB
+TARGET_RECORD_BYTES = 16 * KIB  # a record's training curve is made coarser to fit
+MIN_CURVE_POINTS = 25
 MAX_EVALUATION_RUNS = 50
 MAX_LAPS_PER_RUN = 200
 MAX_ACTIONS = 200

@@ -203,5 +203,17 @@ def _curve(tally: _Tally) -> list[CurvePoint]:
     return points
 
 
+def coarser(curve: list[CurvePoint]) -> list[CurvePoint]:
+    """The curve with half its points (no fewer than MIN_CURVE_POINTS): each pair of buckets
+    merged into one, their means averaged (the buckets are of equal size, give or take one)."""
+    if len(curve) <= limits.MIN_CURVE_POINTS:
+        return curve
+    pairs = [curve[index:index + 2] for index in range(0, len(curve), 2)]
+    return [CurvePoint(episode=pair[-1].episode,
+                       reward=_round(sum(p.reward for p in pair) / len(pair)),
+                       completion_pct=_round(sum(p.completion_pct for p in pair) / len(pair)))
+            for pair in pairs]
+
+
 def _round(value: float) -> float:
     return round(value, 2)

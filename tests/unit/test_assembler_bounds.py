@@ -150,3 +150,19 @@ def test_a_bad_entry_deep_in_a_batched_file_is_named_by_its_index(tmp_path: Path
         assemble(run)
     assert str(caught.value).endswith(f"{TRAINING}: metrics[23].completion_percentage: "
                                       "Input should be less than or equal to 100")
+
+
+def test_a_record_of_many_runs_keeps_within_16_kib_with_a_coarser_training_curve(tmp_path: Path) -> None:
+    from tests import layoutkit as kit
+    from tests.downloadkit import console_download, console_params
+
+    run = console_download(tmp_path / "pitstop-v3")
+    for race in range(4):  # leaderboard races, logged without their metrics files
+        laps = kit.Evaluation(tuple(kit.LapSpec(10.0 + race + lap / 10) for lap in range(3)))
+        kit.write(run / "logs" / "leaderboard" / f"leaderboard-2024050{race}-robomaker.log",
+                  kit.evaluation_log(console_params(METRICS_S3_OBJECT_KEY=f"lb/race-{race}.json"), laps))
+    record = assemble(run)
+    assert len(record.evaluations) == 5
+    assert len(record.model_dump_json()) <= 16 * 1024
+    assert record.training is not None and record.training.episodes == 188
+    assert limits.MIN_CURVE_POINTS <= len(record.training.curve) < 188
