@@ -32,10 +32,11 @@ PRECOMPILED = drboard_assembler drboard_functions segno jinja2 markupsafe typing
 	aws_lambda_powertools/middleware_factory aws_lambda_powertools/shared \
 	aws_lambda_powertools/tracing aws_lambda_powertools/warnings \
 	aws_lambda_powertools/utilities/__init__.py aws_lambda_powertools/utilities/data_classes \
+	aws_lambda_powertools/utilities/batch \
 	aws_lambda_powertools/utilities/jmespath_utils aws_lambda_powertools/utilities/typing
 NOT_PRECOMPILED = (^|/)pydantic/(v1/|experimental/|mypy\.py)
 
-build-PushFunction build-PullFunction build-AdminFunction:
+build-PushFunction build-PullFunction build-AdminFunction build-NotifyFunction:
 	@$(LAMBDA_PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' || { \
 		echo "LAMBDA_PYTHON=$(LAMBDA_PYTHON) is not Python 3.13, the runtime's: the .pyc would" \
 		"not load. Put python3.13 on PATH or pass LAMBDA_PYTHON=/path/to/python3.13." >&2; exit 1; }

@@ -35,7 +35,7 @@ BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardM
                               "UnsupportedBody"})
 #: The domain errors that are failures (exit 1): nothing found, a closed board, a used-up
 #: submission limit, a cooldown, a refusal, the board unreachable or too busy to answer.
-FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "TooSoon", "BoardClosed",
+FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "WebhookNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
                             "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
                             "StoreUnavailable"})

@@ -12,6 +12,8 @@ for an unsigned request) is mapped by its status.
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import re
 import urllib.error
@@ -23,7 +25,9 @@ from typing import Any, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
+from drboard_functions.laps import LAP_COLUMNS
 from drboard_functions.models.domain import MAX_PAGE, Board
+from drboard_functions.models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
 from drboard_functions.models.requests import AliasRequest, BoardChanges, BoardSpec, ImportedSubmission
 from drboard_functions.models.transfer import ExportPage, ImportReceipt
 from drboard_functions.models.views import (
@@ -43,6 +47,7 @@ from drboard_functions.models.views import (
     RankCounters,
 )
 from drboard_functions.service import default_board_id
+from drboard_functions.service.results import LapsPage
 from pydantic import BaseModel, ValidationError
 
 from . import tokens
@@ -61,6 +66,7 @@ _API_REGION = re.compile(r"\.execute-api\.([a-z0-9-]+)\.")
 class Answer:
     status: int
     body: Any
+    headers: Mapping[str, str] | None = None  # case-insensitive (http.client.HTTPMessage)
 
 
 class HttpBoard:
@@ -106,6 +112,16 @@ class HttpBoard:
     def status(self, racer: str, board_id: str | None) -> RacerSummary:
         answer = self._call("GET", f"/racers/{_quote(racer)}", query={"board": board_id})
         return _parse(RacerSummary, answer)
+
+    def laps_page(self, board_id: str, cursor: str | None) -> LapsPage:
+        """One page of the board's laps: the CSV the board answers, read back into rows, and
+        the next page's cursor from its ``Link`` header."""
+        answer = self._call("GET", f"/boards/{_quote(board_id)}/laps.csv", query={"cursor": cursor},
+                            text=True)
+        reader = csv.DictReader(io.StringIO(answer.body), fieldnames=None if cursor is None
+                                else LAP_COLUMNS)
+        rows = [dict(row) for row in reader]
+        return LapsPage(board_id, rows, _next_cursor((answer.headers or {}).get("Link", "")))
 
     # ---- organisers (always signed) -------------------------------------------------------
 
@@ -179,6 +195,21 @@ class HttpBoard:
                             query={"cursor": cursor, "limit": str(limit)}, signed=True)
         return _parse(AuditPage, answer)
 
+    def add_webhook(self, board_id: str, spec: WebhookSpec) -> WebhookView:
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/webhooks", body=spec, signed=True)
+        return _parse(WebhookView, answer)
+
+    def webhooks(self, board_id: str) -> WebhookList:
+        return _parse(WebhookList, self._call("GET", f"/boards/{_quote(board_id)}/webhooks", signed=True))
+
+    def remove_webhook(self, board_id: str, webhook_id: str) -> WebhookView:
+        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}"
+        return _parse(WebhookView, self._call("DELETE", path, signed=True))
+
+    def test_webhook(self, board_id: str, webhook_id: str) -> Delivery:
+        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}/test"
+        return _parse(Delivery, self._call("POST", path, signed=True))
+
     # ---- HTTP ---------------------------------------------------------------------------
 
     def _pages(self, model: type[P], path: str, query: dict[str, str | None]) -> Iterator[P]:
@@ -197,7 +228,8 @@ class HttpBoard:
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: Mapping[str, str | list[str] | None] | None = None,
-              signed: bool = False, token: str | None = None) -> Answer:
+              signed: bool = False, token: str | None = None, text: bool = False) -> Answer:
+        """One request; the answer's JSON (its UTF-8 text with ``text``) and headers."""
         given = {name: value for name, value in (query or {}).items() if value}
         token = token or (fresh_token(self.endpoint) if signed else None)
         prefix = tokens.route_prefix(token) if token else ""
@@ -214,7 +246,9 @@ class HttpBoard:
         request = urllib.request.Request(url, data=data, headers=headers, method=method)
         try:
             with urllib.request.urlopen(request, timeout=self.timeout_s) as response:
-                return Answer(response.status, _json(response.read(), url))
+                data = response.read()
+                return Answer(response.status, data.decode("utf-8") if text else _json(data, url),
+                              response.headers)
         except urllib.error.HTTPError as error:
             raise _domain_error(error, url) from None
         except (urllib.error.URLError, TimeoutError, ConnectionError) as error:
@@ -224,6 +258,18 @@ class HttpBoard:
 
 def _quote(part: str) -> str:
     return urllib.parse.quote(part, safe="")
+
+
+_NEXT_LINK = re.compile(r'<([^>]*)>\s*;\s*rel="?next"?')
+
+
+def _next_cursor(link: str) -> str | None:
+    """The ``cursor`` of the page a ``Link: <...>; rel="next"`` header names, if any."""
+    found = _NEXT_LINK.search(link)
+    if not found:
+        return None
+    cursors = urllib.parse.parse_qs(urllib.parse.urlsplit(found.group(1)).query).get("cursor")
+    return cursors[0] if cursors else None
 
 
 def _json(data: bytes, url: str) -> Any:

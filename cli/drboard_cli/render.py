@@ -190,6 +190,11 @@ def export_line(board_id: str, counts: ExportCounts, output: str | None) -> Text
                 f"{plural(counts.submissions, 'submission')}{where}")
 
 
+def laps_line(board_id: str, rows: int, output: str | None) -> Text:
+    where = f" to {output}" if output else ""
+    return Text(f"Exported {plural(rows, 'lap')} of {board_id}{where}")
+
+
 def progress(console: Console) -> Progress:
     """A progress bar on a terminal; nothing when the output is a file or a pipe."""
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),

@@ -76,6 +76,23 @@ def write_export(client: BoardClient, board_id: str, out: IO[str]) -> ExportCoun
     return counts
 
 
+def write_laps(client: BoardClient, board_id: str, out: IO[str]) -> int:
+    """Every lap of the board's submissions as one CSV file, page after page; the rows written."""
+    from drboard_functions.laps import LAP_COLUMNS, csv_text
+
+    cursor: str | None = None
+    seen: set[str] = set()
+    rows = 0
+    while True:
+        page = client.laps_page(board_id, cursor)
+        out.write(csv_text(LAP_COLUMNS, page.rows, header=cursor is None))
+        rows += len(page.rows)
+        cursor = page.next_cursor
+        if cursor is None or cursor in seen:
+            return rows
+        seen.add(cursor)
+
+
 @contextmanager
 def replaced_on_success(path: Path) -> Iterator[IO[str]]:
     """Write beside ``path`` and move into place only when the whole export is written."""

@@ -32,6 +32,10 @@ class RacerNotFound(DomainError):
     """The racer has no entry on the board (HTTP 404)."""
 
 
+class WebhookNotFound(DomainError):
+    """No such webhook on the board (HTTP 404)."""
+
+
 class InvalidQuery(DomainError):
     """A bad cursor, limit or name in a query (HTTP 400)."""
 

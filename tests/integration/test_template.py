@@ -91,7 +91,7 @@ def test_every_route_of_the_code_has_one_function_in_the_template(sam: dict[str,
               if not path.startswith(COGNITO_PREFIX + "/")]
     assert sorted(served) == sorted(documented), "each route once, by the function that has it"
     functions = [name for name, r in sam["Resources"].items() if r["Type"] == "AWS::Serverless::Function"]
-    assert sorted(functions) == sorted(FUNCTIONS)
+    assert sorted(functions) == sorted([*FUNCTIONS, "NotifyFunction"]), "and the announcer, on no route"
 
 
 def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
@@ -99,7 +99,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 16, "the push, /me, /me/alias and the thirteen organiser routes"
+    assert len(signed) == 20, "the push, /me, /me/alias and the seventeen organiser routes"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()
@@ -161,8 +161,28 @@ def test_every_function_has_its_handler_and_its_build_target(sam: dict[str, Any]
         assert targets, f"the Makefile has no build-{name} target"
 
 
+def test_announcements_go_out_from_the_tables_stream_with_retries_and_a_dead_letter_queue(
+        sam: dict[str, Any]) -> None:
+    table = sam["Resources"]["BoardTable"]["Properties"]
+    assert table["StreamSpecification"]["StreamViewType"] == "NEW_AND_OLD_IMAGES"
+    assert table["TimeToLiveSpecification"] == {"AttributeName": "expires_at", "Enabled": True}
+    notify = sam["Resources"]["NotifyFunction"]["Properties"]
+    assert notify["Handler"] == "drboard_functions.handlers.notify.lambda_handler"
+    stream = notify["Events"]["EntryChanges"]["Properties"]
+    assert stream["FunctionResponseTypes"] == ["ReportBatchItemFailures"]
+    assert stream["MaximumRetryAttempts"] >= 1 and stream["BisectBatchOnFunctionError"] is True
+    assert stream["DestinationConfig"]["OnFailure"]["Type"] == "SQS"
+    pattern = json.loads(stream["FilterCriteria"]["Filters"][0]["Pattern"])
+    assert pattern["dynamodb"]["Keys"]["sk"]["S"] == [{"prefix": "R#"}], "entries only"
+    schedule = notify["Events"]["BoardWindows"]
+    assert schedule["Type"] == "ScheduleV2"
+    assert json.loads(schedule["Properties"]["Input"]) == {"check": "windows"}
+    assert re.search(r"^build-\w+( build-\w+)* build-NotifyFunction:|build-NotifyFunction",
+                     (ROOT / "Makefile").read_text(), re.MULTILINE)
+
+
 def test_functions_run_on_python_313_arm64(cloudformation: dict[str, Any]) -> None:
-    for name in FUNCTIONS:
+    for name in [*FUNCTIONS, "NotifyFunction"]:
         properties = cloudformation["Resources"][name]["Properties"]
         assert properties["Runtime"] == "python3.13"
         assert properties["Architectures"] == ["arm64"]

@@ -52,6 +52,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
     The log says who pushed which model, its time and rank, and every refusal. Ctrl-C stops it;
     every push that was answered is saved.
     """
+    from drboard_functions.notify.notifier import NoticeWorker
     from drboard_functions.services import dynamodb_service, sqlite_service
 
     from ..joins import JoinDesk
@@ -72,6 +73,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         server = BoardServer((host, port), service, desk, log_requests=log_requests)
         bound_host, bound_port = str(server.server_address[0]), int(server.server_address[1])
         url = server.public_url
+        notices = NoticeWorker(service, url).start()  # the chat's announcements, in the background
         out().print(f"Serving {where} on {url}  (listening on {bound_host}:{bound_port}; Ctrl-C "
                     "to stop)", soft_wrap=True, highlight=False)
         boards = [board_id] if board_id else [b.board_id for b in service.boards()][:5]
@@ -91,6 +93,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         finally:
             stop.set()
             server.server_close()
+            notices.stop()
             desk.close()
 
 

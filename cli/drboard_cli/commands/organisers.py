@@ -236,16 +236,30 @@ def audit(ctx: Context, board_id: str, fmt: str) -> None:
 @click.argument("board_id", metavar="BOARD")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="Write to this file (written whole or not at all) instead of standard output.")
+@click.option("--laps", is_flag=True,
+              help="Write every lap of every submission as CSV instead, for a notebook or a "
+                   "spreadsheet (anyone may: the board's laps are public).")
 @pass_context
-def export_command(ctx: Context, board_id: str, output: Path | None) -> None:
+def export_command(ctx: Context, board_id: str, output: Path | None, laps: bool) -> None:
     """Write a board as JSON lines: a backup, or a move to another board.
 
     One JSON object per line: the board and its settings first, then its entries in rank order,
     then every submission with its record. `drboard import` loads the file into any board.
+    With --laps, one CSV row per lap instead: racer, model, submission, submitted_at, run, lap,
+    time_s, completion, status, off-tracks, crashes, resets.
     """
     from .. import render, transfer
 
     with edge():
+        if laps:
+            if output:
+                with transfer.replaced_on_success(output) as handle:
+                    rows = transfer.write_laps(ctx.board, board_id, handle)
+            else:
+                rows = transfer.write_laps(ctx.board, board_id, sys.stdout)
+            err().print(render.laps_line(board_id, rows, str(output) if output else None),
+                        soft_wrap=True)
+            return
         if output:
             with transfer.replaced_on_success(output) as handle:
                 counts = transfer.write_export(ctx.board, board_id, handle)
@@ -276,3 +290,12 @@ def import_command(ctx: Context, source: str, board_id: str | None) -> None:
             summary = transfer.import_export(ctx.board, name, handle, contents, board_id,
                                              advance=lambda: progress.advance(task))
         out().print(render.import_summary(summary), soft_wrap=True)
+
+
+def _add_webhook_commands() -> None:
+    from .webhooks import webhook_group
+
+    board_group.add_command(webhook_group)
+
+
+_add_webhook_commands()

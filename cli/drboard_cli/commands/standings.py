@@ -207,13 +207,17 @@ def racer_options(command: Any) -> Any:
 
 @click.command()
 @racer_options
-@format_option
+@click.option("--format", "fmt", type=click.Choice(["table", "json", "csv"]), default="table",
+              show_default=True, help=FORMAT_HELP + " csv: one row per submission, for a "
+                                                    "notebook or a spreadsheet.")
 @pass_context
 def history(ctx: Context, racer: str | None, track: str | None, board: str | None,
             fmt: str) -> None:
     """A racer's submissions on every board, oldest first.
 
-    ★ marks each board's counted submission, the racer's best there.
+    ★ marks each board's counted submission, the racer's best there. --format csv writes them
+    over time for a notebook or a spreadsheet: submitted_at, board, model, qualified, time_s,
+    best_lap_s, laps completed, best completion, counted, flags.
     """
     from .. import render
 
@@ -221,7 +225,11 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
         name = _racer(racer)
         board_id = _board_id(track, board) if (track or board) else None
         items = ctx.board.history(name, board_id)
-        if fmt == "json":
+        if fmt == "csv":
+            from drboard_functions.laps import HISTORY_COLUMNS, csv_text, history_rows
+
+            click.echo(csv_text(HISTORY_COLUMNS, history_rows(items)), nl=False)
+        elif fmt == "json":
             click.echo(render.write_json([i.model_dump(mode="json") for i in items]), nl=False)
         elif items:
             out().print(render.history_table(name, items, out().width))

@@ -5,17 +5,22 @@ keeps every accepted record (optional: the pull function has none). ``USER_POOL_
 ``USER_POOL_CLIENT_ID`` and ``USER_POOL_DOMAIN`` say how racers sign in (the pull function tells
 clients at ``/.well-known/drboard.json``). The service and its AWS clients are built once per
 container (by :mod:`drboard_functions.services`, with the functions' timeouts and retries) and
-reused by every invocation.
+reused by every invocation. ``BOARD_URL`` is the board's address, which the NotifyFunction's
+announcements link to.
 """
 
 from __future__ import annotations
 
 import os
 from functools import cache
+from typing import TYPE_CHECKING
 
 from .. import services
 from ..identity import SignIn
 from ..service import LeaderboardService
+
+if TYPE_CHECKING:
+    from ..notify.notifier import Notifier
 
 #: What the handlers' X-Ray tracer patches: the AWS SDK, the one library that calls out. (By
 #: default Powertools patches every library the X-Ray SDK knows that is installed, e.g. sqlite3
@@ -28,6 +33,17 @@ def service_from_environment() -> LeaderboardService:
     return services.dynamodb_service(os.environ["TABLE_NAME"],
                                      archive_bucket=os.environ.get("ARCHIVE_BUCKET") or None,
                                      config=services.client_config())
+
+
+@cache
+def notifier_from_environment() -> Notifier:
+    """The NotifyFunction's: the board's table, and its pages at ``BOARD_URL``."""
+    from .. import web
+    from ..notify.notifier import Notifier
+
+    service = service_from_environment()
+    base = os.environ.get("BOARD_URL", "").rstrip("/")
+    return Notifier(service.store, service.clock, lambda board_id: base + web.board_path(board_id))
 
 
 @cache

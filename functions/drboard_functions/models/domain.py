@@ -259,7 +259,7 @@ class AliasClaim(Model):
 
 
 AuditAction = Literal["push", "create", "update", "close", "delete", "restore", "import",
-                      "remove-entry", "ban", "unban"]
+                      "remove-entry", "ban", "unban", "webhook-add", "webhook-remove"]
 
 
 class AuditEvent(Model):

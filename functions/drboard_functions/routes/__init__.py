@@ -18,7 +18,7 @@ Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerat
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
 """
 
-from . import boards, organisers, pages, submissions  # noqa: F401 - each registers its routes
+from . import boards, organisers, pages, results, submissions, webhooks  # noqa: F401 - each registers its routes
 from .app import (
     COGNITO_PREFIX,
     ERROR_STATUS,

@@ -65,6 +65,7 @@ from ..errors import (
     TooSoon,
     UnreadableBody,
     UnsupportedBody,
+    WebhookNotFound,
 )
 from .params import ADMIN_TAG, SIGV4, RequestBody, bounded_json, route_body
 from .responses import ErrorBody, api_version, page_answer
@@ -107,6 +108,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (SubmissionTooLarge, HTTPStatus.REQUEST_ENTITY_TOO_LARGE),
     (BoardNotFound, HTTPStatus.NOT_FOUND),
     (RacerNotFound, HTTPStatus.NOT_FOUND),
+    (WebhookNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
     (UnreadableBody, HTTPStatus.BAD_REQUEST),
     (UnsupportedBody, HTTPStatus.UNSUPPORTED_MEDIA_TYPE),

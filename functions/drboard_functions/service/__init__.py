@@ -5,8 +5,9 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading) and ``transfer`` (export and import). :class:`LeaderboardService` only hands
-each call to the room that answers it.
+trail's reading), ``transfer`` (export and import), ``results`` (laps to analyse) and
+``webhooks`` (the chat's announcements).
+:class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Concatenate, ParamSpec, TypeVar
 
+from ..models.notices import EntryChange
 from ..stores.base import BoardStore, RecordArchive
 from .boards import (
     CUSTOM_PREFIX,
@@ -30,13 +32,15 @@ from .moderating import Moderating
 from .paging import DEFAULT_PAGE
 from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+from .results import LAPS_PAGE, Results
 from .transfer import Transfer
+from .webhooks import Webhooks
 
 P = ParamSpec("P")
 R = TypeVar("R")
 
 __all__ = [
-    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "MAX_COMPARED", "MAX_TOP", "Clock",
+    "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "LAPS_PAGE", "MAX_COMPARED", "MAX_TOP", "Clock",
     "LeaderboardService", "board_for_track", "check_record_size", "default_board_id",
     "evaluation_fingerprints", "is_default_board_id", "racer_key", "scored_write", "utc_now",
 ]
@@ -69,6 +73,9 @@ class LeaderboardService:
         self._managing = Managing(keeper)
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
+        self._results = Results(keeper)
+        self._webhooks = Webhooks(keeper)
+        self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)
@@ -100,3 +107,15 @@ class LeaderboardService:
     export_page = _handed_to("_transfer", Transfer.export_page)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
+
+    laps_page = _handed_to("_results", Results.laps_page)
+    run_laps = _handed_to("_results", Results.run_laps)
+
+    add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
+    webhooks = _handed_to("_webhooks", Webhooks.webhooks)
+    remove_webhook = _handed_to("_webhooks", Webhooks.remove_webhook)
+    test_webhook = _handed_to("_webhooks", Webhooks.test_webhook)
+
+    def listen(self, listener: Callable[[EntryChange], None] | None) -> None:
+        """Tell ``listener`` of every entry a push improves, as it happens (None: no one)."""
+        self._keeper.listener = listener

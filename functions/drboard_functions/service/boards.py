@@ -20,6 +20,7 @@ from ..conditions import meets, unmet
 from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
 from ..identity import Caller
 from ..models.domain import AuditAction, AuditEvent, Board, BoardRules, BoardStatus, Entry, run_mismatches
+from ..models.notices import EntryChange
 from ..models.requests import BoardSpec
 from ..models.views import BoardView
 from ..stores.base import BoardHasEntries, BoardStore, StoredBoard
@@ -184,6 +185,8 @@ class BoardKeeper:
     def __init__(self, store: BoardStore, clock: Clock) -> None:
         self.store = store
         self.clock = clock
+        #: Told of every entry a push improves (`drboard serve`'s announcer), if anyone listens.
+        self.listener: Callable[[EntryChange], None] | None = None
 
     def require(self, board_id: str) -> StoredBoard:
         return live(board_id, self.store.get_board(board_id))

@@ -27,6 +27,7 @@ from ..errors import (
 )
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import AliasClaim, Board, Entry, RacerTally, Submission, SubmissionLimits
+from ..models.notices import EntryChange
 from ..models.views import Me, PushReceipt
 from ..stores.base import AliasConflict, FingerprintTaken, LimitReached, RecordArchive
 from ..views import design_of, entry_view, history_item
@@ -64,6 +65,7 @@ class Pushing:
         audit = self.keeper.event(board.board_id, "push", caller, now, racer=record.racer,
                                   submission_id=record.submission_id, detail=record.model_name)
         keep_in_archive(self.archive, board.board_id, record)
+        before = self.store.get_entry(board.board_id, key) if self.keeper.listener else None
         try:
             outcome = self.store.record_submission(submission, record, entry, limits,
                                                    fingerprints=evaluation_fingerprints(record),
@@ -76,6 +78,9 @@ class Pushing:
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
             stored = self.store.get_submission(board.board_id, key, record.submission_id)
             return self._duplicate_receipt(stored or submission, record.racer)
+        if outcome.improved and self.keeper.listener is not None:
+            self.keeper.listener(EntryChange(board_id=board.board_id, before=before,
+                                             after=outcome.entry, at=now))
         return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
 
     def _duplicate_receipt(self, stored: Submission, racer: str) -> PushReceipt:

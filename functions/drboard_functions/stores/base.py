@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
+from datetime import datetime
 from typing import NamedTuple, Protocol
 
 from drboard_assembler.record import Record
@@ -18,6 +19,7 @@ from ..models.domain import (
     SubmissionLimits,
     WriteOutcome,
 )
+from ..models.notices import MAX_ERROR_CHARS, Webhook
 
 
 class StoredBoard(NamedTuple):
@@ -118,7 +120,52 @@ class HistorySlice(NamedTuple):
     after: str | None  # where the next page starts; None on the last page
 
 
-class BoardStore(Protocol):
+class NoticeStore(Protocol):
+    """Where announcements keep their webhooks and their sent markers (both stores have it)."""
+
+    def put_webhook(self, webhook: Webhook) -> None:
+        """Add (or replace) a webhook of its target."""
+
+    def webhooks(self, target_key: str) -> list[Webhook]:
+        """The target's webhooks, oldest first."""
+
+    def all_webhooks(self) -> list[Webhook]:
+        """Every target's webhooks (what a check of the boards' windows looks at)."""
+
+    def delete_webhook(self, target_key: str, webhook_id: str) -> Webhook | None:
+        """Remove a webhook; the one removed, or None."""
+
+    def note_delivery(self, target_key: str, webhook_id: str, at: datetime,
+                      error: str | None) -> None:
+        """Keep how the webhook's last delivery went: sent at ``at``, or failed with ``error``."""
+
+    def claim_notice(self, notice_id: str, webhook_id: str, now: datetime, lease_s: int) -> bool:
+        """Atomically take the right to send the event to the webhook: True unless it was sent
+        already, or another sender took it less than ``lease_s`` ago."""
+
+    def finish_notice(self, notice_id: str, webhook_id: str, sent: bool) -> None:
+        """Mark a claimed notice sent (never sent again), or failed (the next try may claim it)."""
+
+
+def claimable(state: str, lease_until: str, now: datetime) -> bool:
+    """Whether a notice may be claimed: it failed, or its sender's lease ran out (a sender that
+    died after claiming it); never once sent."""
+    from .. import ranking
+
+    if state == "sent":
+        return False
+    return state == "failed" or ranking.parse_timestamp(lease_until) <= now
+
+
+def delivered(webhook: Webhook, at: datetime, error: str | None) -> Webhook:
+    """The webhook with its last delivery noted: sent at ``at`` (its last error cleared), or
+    failed at ``at`` with ``error``."""
+    if error is None:
+        return webhook.model_copy(update={"last_sent_at": at, "last_error": None, "last_error_at": None})
+    return webhook.model_copy(update={"last_error": error[:MAX_ERROR_CHARS], "last_error_at": at})
+
+
+class BoardStore(NoticeStore, Protocol):
     def get_board(self, board_id: str) -> StoredBoard | None:
         """The board and its number of racers, or None."""
 

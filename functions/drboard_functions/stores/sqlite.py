@@ -14,6 +14,7 @@ import threading
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from datetime import datetime, timedelta
 from pathlib import Path
 
 from drboard_assembler.record import Record
@@ -30,6 +31,7 @@ from ..models.domain import (
     SubmissionLimits,
     WriteOutcome,
 )
+from ..models.notices import Webhook
 from . import rank_buckets
 from .base import (
     AliasConflict,
@@ -43,6 +45,8 @@ from .base import (
     StoredBoard,
     StoredSubmissionPage,
     SubmissionPage,
+    claimable,
+    delivered,
     page_token,
     read_page_token,
     stored_record,
@@ -92,6 +96,19 @@ CREATE TABLE IF NOT EXISTS rank_counts (
     child    TEXT NOT NULL,
     entries  INTEGER NOT NULL,
     PRIMARY KEY (board_id, node, child)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS webhooks (
+    target     TEXT NOT NULL,
+    webhook_id TEXT NOT NULL,
+    webhook    TEXT NOT NULL,
+    PRIMARY KEY (target, webhook_id)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS notices (
+    notice_id   TEXT NOT NULL,
+    webhook_id  TEXT NOT NULL,
+    state       TEXT NOT NULL,
+    lease_until TEXT NOT NULL,
+    PRIMARY KEY (notice_id, webhook_id)
 ) WITHOUT ROWID;
 CREATE TABLE IF NOT EXISTS aliases (
     racer_key TEXT PRIMARY KEY,
@@ -464,6 +481,57 @@ class SqliteStore:
         assert column in ("racer_key", "principal")
         row = db.execute(f"SELECT claim FROM aliases WHERE {column} = ?", (value,)).fetchone()
         return AliasClaim.model_validate_json(row[0]) if row else None
+
+
+    # ---- webhooks and announcements -------------------------------------------------------
+
+    def put_webhook(self, webhook: Webhook) -> None:
+        with self._write() as db:
+            db.execute("INSERT OR REPLACE INTO webhooks VALUES (?, ?, ?)",
+                       (webhook.target.key, webhook.webhook_id, webhook.model_dump_json()))
+
+    def webhooks(self, target_key: str) -> list[Webhook]:
+        rows = self._db.execute("SELECT webhook FROM webhooks WHERE target = ?", (target_key,))
+        return sorted((Webhook.model_validate_json(row[0]) for row in rows),
+                      key=lambda w: (w.created_at, w.webhook_id))
+
+    def all_webhooks(self) -> list[Webhook]:
+        rows = self._db.execute("SELECT webhook FROM webhooks ORDER BY target, webhook_id")
+        return [Webhook.model_validate_json(row[0]) for row in rows]
+
+    def delete_webhook(self, target_key: str, webhook_id: str) -> Webhook | None:
+        with self._write() as db:
+            row = db.execute("SELECT webhook FROM webhooks WHERE target = ? AND webhook_id = ?",
+                             (target_key, webhook_id)).fetchone()
+            db.execute("DELETE FROM webhooks WHERE target = ? AND webhook_id = ?",
+                       (target_key, webhook_id))
+        return Webhook.model_validate_json(row[0]) if row else None
+
+    def note_delivery(self, target_key: str, webhook_id: str, at: datetime,
+                      error: str | None) -> None:
+        with self._write() as db:
+            row = db.execute("SELECT webhook FROM webhooks WHERE target = ? AND webhook_id = ?",
+                             (target_key, webhook_id)).fetchone()
+            if row is None:
+                return
+            webhook = delivered(Webhook.model_validate_json(row[0]), at, error)
+            db.execute("UPDATE webhooks SET webhook = ? WHERE target = ? AND webhook_id = ?",
+                       (webhook.model_dump_json(), target_key, webhook_id))
+
+    def claim_notice(self, notice_id: str, webhook_id: str, now: datetime, lease_s: int) -> bool:
+        with self._write() as db:
+            row = db.execute("SELECT state, lease_until FROM notices WHERE notice_id = ? AND "
+                             "webhook_id = ?", (notice_id, webhook_id)).fetchone()
+            if row is not None and not claimable(row[0], row[1], now):
+                return False
+            db.execute("INSERT OR REPLACE INTO notices VALUES (?, ?, 'sending', ?)",
+                       (notice_id, webhook_id, ranking.timestamp(now + timedelta(seconds=lease_s))))
+            return True
+
+    def finish_notice(self, notice_id: str, webhook_id: str, sent: bool) -> None:
+        with self._write() as db:
+            db.execute("UPDATE notices SET state = ? WHERE notice_id = ? AND webhook_id = ?",
+                       ("sent" if sent else "failed", notice_id, webhook_id))
 
 
 @contextmanager

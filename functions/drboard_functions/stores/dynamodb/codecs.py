@@ -21,7 +21,10 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
 - ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``).
 
 Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
-holds an alias's claim and ``P#<principal>`` the same claim by its sign-in.
+holds an alias's claim and ``P#<principal>`` the same claim by its sign-in. Webhooks live in
+``#WEBHOOK`` (sort key ``<target key>#<webhook id>``, the webhook in ``data``), and the markers of
+announcements sent in ``#NOTICE`` (``<event id>#<webhook id>``: ``state``, ``lease_until``, and
+``expires_at`` for the table's time to live).
 """
 
 from __future__ import annotations
@@ -42,6 +45,8 @@ if TYPE_CHECKING:
 
 BOARD_SK = "#BOARD"
 ALIAS_PARTITION = "#ALIAS"
+WEBHOOK_PARTITION = "#WEBHOOK"
+NOTICE_PARTITION = "#NOTICE"
 FIRST_ENTRY = "0"  # every entry's rank key sorts after this, the board's before it
 BOARD_KIND = "board"
 RANK_INDEX = "by_rank"

@@ -9,6 +9,7 @@ package talks to DynamoDB.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from datetime import datetime, timedelta
 from typing import TYPE_CHECKING, Any
 
 import boto3
@@ -27,6 +28,7 @@ from ...models.domain import (
     SubmissionLimits,
     WriteOutcome,
 )
+from ...models.notices import Webhook
 from ..aws_errors import cancellation_codes, code_of, translating
 from ..base import (
     AliasConflict,
@@ -38,6 +40,7 @@ from ..base import (
     StoredBoard,
     StoredSubmissionPage,
     SubmissionPage,
+    delivered,
     page_token,
     read_page_token,
     stored_record,
@@ -48,8 +51,10 @@ from .codecs import (
     BOARD_SK,
     BOARDS_INDEX,
     FIRST_ENTRY,
+    NOTICE_PARTITION,
     RACER_INDEX,
     RANK_INDEX,
+    WEBHOOK_PARTITION,
     alias_items,
     audit_event_of,
     audit_item,
@@ -79,6 +84,8 @@ if TYPE_CHECKING:
     from .codecs import Item
 
 BATCH_GET_KEYS = 100
+#: How long the table keeps a sent marker (its time to live): past any retry of its event.
+NOTICE_TTL = timedelta(days=30)
 
 
 @translating("the board's table")
@@ -259,6 +266,75 @@ class DynamoDbStore:
     def alias_holder(self, racer_key: str) -> AliasClaim | None:
         item = self.get_item(ALIAS_PARTITION, f"K#{racer_key}")
         return claim_of(item) if item else None
+
+    # ---- webhooks and announcements -------------------------------------------------------
+
+    def put_webhook(self, webhook: Webhook) -> None:
+        self.client.put_item(TableName=self.table, Item={
+            **key(WEBHOOK_PARTITION, f"{webhook.target.key}#{webhook.webhook_id}"),
+            "data": text(webhook.model_dump_json())})
+
+    def webhooks(self, target_key: str) -> list[Webhook]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :partition AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":partition": text(WEBHOOK_PARTITION),
+                                          ":prefix": text(target_key + "#")}})
+        found = [Webhook.model_validate_json(item["data"]["S"]) for item in items]
+        return sorted((w for w in found if w.target.key == target_key),
+                      key=lambda w: (w.created_at, w.webhook_id))
+
+    def all_webhooks(self) -> list[Webhook]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :partition",
+            "ExpressionAttributeValues": {":partition": text(WEBHOOK_PARTITION)}})
+        return [Webhook.model_validate_json(item["data"]["S"]) for item in items]
+
+    def delete_webhook(self, target_key: str, webhook_id: str) -> Webhook | None:
+        answer = self.client.delete_item(TableName=self.table, ReturnValues="ALL_OLD",
+                                         Key=key(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}"))
+        old = answer.get("Attributes")
+        return Webhook.model_validate_json(old["data"]["S"]) if old else None
+
+    def note_delivery(self, target_key: str, webhook_id: str, at: datetime,
+                      error: str | None) -> None:
+        item = self.get_item(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}")
+        if item is None:
+            return
+        webhook = delivered(Webhook.model_validate_json(item["data"]["S"]), at, error)
+        try:
+            self.client.put_item(TableName=self.table, ConditionExpression="attribute_exists(sk)",
+                                 Item={**key(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}"),
+                                       "data": text(webhook.model_dump_json())})
+        except ClientError as problem:
+            if code_of(problem) != "ConditionalCheckFailedException":
+                raise  # removed meanwhile: nothing to note
+
+    def claim_notice(self, notice_id: str, webhook_id: str, now: datetime, lease_s: int) -> bool:
+        until = now + timedelta(seconds=lease_s)
+        try:
+            self.client.put_item(
+                TableName=self.table,
+                Item={**key(NOTICE_PARTITION, f"{notice_id}#{webhook_id}"),
+                      "state": text("sending"), "lease_until": text(ranking.timestamp(until)),
+                      "expires_at": {"N": str(int((now + NOTICE_TTL).timestamp()))}},
+                ConditionExpression="attribute_not_exists(sk) OR #state = :failed OR "
+                                    "(#state = :sending AND lease_until <= :now)",
+                ExpressionAttributeNames={"#state": "state"},
+                ExpressionAttributeValues={":failed": text("failed"), ":sending": text("sending"),
+                                           ":now": text(ranking.timestamp(now))})
+        except ClientError as problem:
+            if code_of(problem) != "ConditionalCheckFailedException":
+                raise
+            return False
+        return True
+
+    def finish_notice(self, notice_id: str, webhook_id: str, sent: bool) -> None:
+        self.client.update_item(
+            TableName=self.table, Key=key(NOTICE_PARTITION, f"{notice_id}#{webhook_id}"),
+            UpdateExpression="SET #state = :state", ExpressionAttributeNames={"#state": "state"},
+            ExpressionAttributeValues={":state": text("sent" if sent else "failed")})
 
     # ---- reads ----------------------------------------------------------------------------
 
