@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from click.testing import CliRunner
 from drboard_assembler import assemble
-from drboard_assembler.record import Conditions, EvaluationRun, Record, content_hash
+from drboard_assembler.record import Conditions, EvaluationRun, RaceType, Record, content_hash
 from drboard_cli.main import cli
 from drboard_functions import web
 from drboard_functions.errors import BoardLocked, BoardMismatch
@@ -205,3 +205,19 @@ def test_a_stored_record_ranks_and_shows_as_before(service: LeaderboardService) 
     assert receipt.entry.conditions is None
     html = web.racer_page(service.racer(TRACK, record.racer))
     assert "<th scope=\"row\">off-track penalty</th><td>unknown</td>" in html
+
+
+# ------------------------------------------------------------------ a track's other boards
+
+def test_pull_of_a_track_with_only_its_object_avoidance_board_lists_its_boards(tmp_path: Path) -> None:
+    db = str(tmp_path / "board.sqlite")
+    LeaderboardService(SqliteStore(db)).push(make_record("Orthogonal", track="Belille",
+                                                         race_type=RaceType.OBJECT_AVOIDANCE))
+    runner = CliRunner()
+    pulled = runner.invoke(cli, ["--db", db, "pull", "--track", "Belille"])
+    assert pulled.exit_code == 1
+    assert pulled.output == ("error: no board 'Belille': no run was pushed to the track's default board; "
+                             "its boards are Belille_oa (Cumulo Turnpike, object avoidance, 1 racer) "
+                             "(use --board ID)\n")
+    nowhere = runner.invoke(cli, ["--db", db, "pull", "--track", "Aragon"])
+    assert nowhere.exit_code == 1 and "its boards are" not in nowhere.output
