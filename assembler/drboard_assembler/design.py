@@ -161,6 +161,13 @@ def build_design(model: Facts | None, evaluated: Facts | None, trained: Facts | 
                                   "sources": DesignSources(**sources, hyperparameters=hyper_source)})
 
 
+def load_design(metadata: bytes, metadata_name: str, hyperparameters: bytes | None,
+                hyperparameters_name: str) -> Design:
+    """The design a model_metadata.json and a hyperparameters.json describe, on their own."""
+    hyper = NamedFile(hyperparameters_name, hyperparameters) if hyperparameters is not None else None
+    return build_design(metadata_facts(NamedFile(metadata_name, metadata)), None, None, hyper, None)
+
+
 def _described_by(model: Facts | None, evaluated: Facts | None, trained: Facts | None) -> Facts | None:
     """The metadata when nothing contradicts it, else what the evaluation printed, else what
     the training printed."""

@@ -3,7 +3,9 @@
 A long DeepRacer-for-Cloud training writes hundreds of megabytes of entries, over a million of
 them. A large file is read a batch of entries at a time into compact arrays of the figures the
 summary needs, so that memory stays near the file's own size: the rest of the document is checked
-as JSON with its entries left out, and each batch is validated as the record's bounds require.
+as JSON with its entries left out, and each batch, cut between two entries, is validated as the
+record's bounds require. Where the batches do not read, the whole file is validated at once, which
+gives the same answer and names what is wrong.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 from pydantic.dataclasses import dataclass as validated_dataclass
 
 from . import limits
-from .errors import AssemblyError, field_path
-from .reading import from_validation_error, validate_json
+from .errors import AssemblyError
+from .reading import validate_json
 from .record import CurvePoint, Figure, Moment, Percent, TrainingSummary
 
 Episode = Annotated[int, Field(ge=0, le=100_000_000)]
@@ -28,13 +30,13 @@ Finite = Annotated[Figure, Field(allow_inf_nan=False)]
 Timestamp = Annotated[Moment, Field(allow_inf_nan=False)]
 #: How far an entry's end minus its start may stray from its elapsed time (both are rounded).
 TIMESTAMP_TOLERANCE_MS = 1000
-#: Files past this size are read a batch of entries at a time.
-BATCHED_FROM_BYTES = 8 * limits.MIB
-BATCH_ENTRIES = 20_000
+#: Files past this size are read a batch of entries (of about BATCH_BYTES) at a time.
+BATCHED_FROM_BYTES = 64 * limits.MIB
+BATCH_BYTES = 4 * limits.MIB
 
 _METRICS_ARRAY = re.compile(rb'"metrics"\s*:\s*\[')
-_FLAT_OBJECT = re.compile(rb"\{[^{}\[\]]*\}")
-_SPACE = re.compile(rb"\s*")
+#: Between two entries: the one's closing brace, a comma, the other's opening brace.
+_BETWEEN_ENTRIES = re.compile(rb"\}\s*,\s*\{")
 
 
 @validated_dataclass(slots=True, config=ConfigDict(extra="ignore"))
@@ -72,15 +74,15 @@ class _Tally:
 
     def add(self, batch: list[_TrainingEntry]) -> None:
         self.entries += len(batch)
-        for entry in batch:
-            self.elapsed_ms += entry.elapsed_time_in_milliseconds
-            if _timestamps_agree(entry):
-                self.first_start = min(self.first_start, entry.start_time or 0.0)
-                self.last_end = max(self.last_end, entry.metric_time or 0.0)
-            if entry.phase.strip().lower() == "training":
-                self.episodes.append(entry.episode)
-                self.rewards.append(entry.reward_score)
-                self.completions.append(entry.completion_percentage)
+        self.elapsed_ms += sum(e.elapsed_time_in_milliseconds for e in batch)
+        timed = [(e.start_time or 0.0, e.metric_time or 0.0) for e in batch if _timestamps_agree(e)]
+        if timed:
+            self.first_start = min(self.first_start, min(start for start, _ in timed))
+            self.last_end = max(self.last_end, max(end for _, end in timed))
+        training = [e for e in batch if e.phase == "training" or e.phase.strip().lower() == "training"]
+        self.episodes.extend(e.episode for e in training)
+        self.rewards.extend(e.reward_score for e in training)
+        self.completions.extend(e.completion_percentage for e in training)
 
     def duration_s(self) -> float:
         """From the first episode's start to the last one's end, by the timestamps of the entries
@@ -106,18 +108,38 @@ def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None
     total = _Tally()
     duration_s = 0.0
     for data, name in files:
-        tally = _Tally()
-        for batch in _batches(data, name):
-            tally.add(batch)
-            if total.entries + tally.entries > limits.MAX_TRAINING_ENTRIES:
-                raise AssemblyError(name, "metrics", f"the training metrics hold over "
-                                    f"{limits.MAX_TRAINING_ENTRIES:,} entries, past any training's")
+        tally = _file_tally(data, name, total.entries)
         duration_s = max(duration_s, tally.duration_s())
         total.entries += tally.entries
         total.episodes.extend(tally.episodes)
         total.rewards.extend(tally.rewards)
         total.completions.extend(tally.completions)
     return _summary(total, duration_s, training_track)
+
+
+def _file_tally(data: bytes, name: str, before: int) -> _Tally:
+    """One file's figures: a large file's a batch at a time, else (or when its batches do not
+    read) the whole file's at once, which names what is wrong."""
+    chunks = _entry_chunks(data) if len(data) >= BATCHED_FROM_BYTES else None
+    if chunks is not None:
+        tally = _Tally()
+        try:
+            for chunk in chunks:
+                tally.add(_BATCH.validate_json(chunk))
+                _check_count(before + tally.entries, name)
+            return tally
+        except ValidationError:
+            pass
+    tally = _Tally()
+    tally.add(validate_json(_TrainingFile, data, name).metrics)
+    _check_count(before + tally.entries, name)
+    return tally
+
+
+def _check_count(entries: int, name: str) -> None:
+    if entries > limits.MAX_TRAINING_ENTRIES:
+        raise AssemblyError(name, "metrics", f"the training metrics hold over "
+                            f"{limits.MAX_TRAINING_ENTRIES:,} entries, past any training's")
 
 
 def _summary(tally: _Tally, duration_s: float, track: str | None) -> TrainingSummary:
@@ -136,52 +158,28 @@ def _summary(tally: _Tally, duration_s: float, track: str | None) -> TrainingSum
     )
 
 
-def _batches(data: bytes, name: str) -> Iterator[list[_TrainingEntry]]:
-    """The file's entries, all at once for a small file, else a batch at a time."""
-    spans = _entry_spans(data) if len(data) >= BATCHED_FROM_BYTES else None
-    if spans is None:
-        yield validate_json(_TrainingFile, data, name).metrics
-        return
-    for first in range(0, len(spans), BATCH_ENTRIES):
-        chunk = spans[first:first + BATCH_ENTRIES]
-        try:
-            yield _BATCH.validate_json(b"[" + b",".join(data[start:end] for start, end in chunk) + b"]")
-        except ValidationError as error:
-            raise _batch_error(error, first, name) from None
-
-
-def _entry_spans(data: bytes) -> list[tuple[int, int]] | None:
-    """Where each entry of ``{"metrics": [{...}, ...]}`` is, when the document is that: its
-    entries flat objects, and the rest of it valid JSON. None when it is not so simple (the
-    whole document is then validated at once, which names what is wrong)."""
+def _entry_chunks(data: bytes) -> Iterator[bytes] | None:
+    """``{"metrics": [{...}, ...]}`` cut into JSON arrays of about BATCH_BYTES each, between two
+    entries; None when the document around the entries is not that."""
     opening = _METRICS_ARRAY.search(data)
-    if opening is None:
+    closing = data.rfind(b"]")
+    if opening is None or closing < opening.end():
         return None
-    spans, position = [], _SPACE.match(data, opening.end()).end()  # type: ignore[union-attr]
-    while position < len(data) and data[position:position + 1] != b"]":
-        entry = _FLAT_OBJECT.match(data, position)
-        if entry is None:
-            return None
-        spans.append(entry.span())
-        position = _SPACE.match(data, entry.end()).end()  # type: ignore[union-attr]
-        if data[position:position + 1] == b",":
-            position = _SPACE.match(data, position + 1).end()  # type: ignore[union-attr]
-        elif data[position:position + 1] != b"]":
-            return None
     try:
-        rest = json.loads(data[:opening.end() - 1] + b"[]" + data[position + 1:])
+        rest = json.loads(data[:opening.end() - 1] + b"[]" + data[closing + 1:])
     except (ValueError, RecursionError):
         return None
-    return spans if isinstance(rest, dict) and rest.get("metrics") == [] else None
+    if not isinstance(rest, dict) or rest.get("metrics") != []:
+        return None
+    return _chunks(data, opening.end(), closing)
 
 
-def _batch_error(error: ValidationError, first: int, name: str) -> AssemblyError:
-    detail = error.errors(include_url=False)[0]
-    location = list(detail["loc"])
-    if location and isinstance(location[0], int):
-        location[0] += first
-    return AssemblyError(name, field_path(["metrics", *location]), detail["msg"]) if location else \
-        from_validation_error(error, name)
+def _chunks(data: bytes, start: int, end: int) -> Iterator[bytes]:
+    while start < end:
+        cut = _BETWEEN_ENTRIES.search(data, min(start + BATCH_BYTES, end), end)
+        stop = cut.start() + 1 if cut else end
+        yield b"[" + data[start:stop] + b"]"
+        start = cut.end() - 1 if cut else end
 
 
 def _curve(tally: _Tally) -> list[CurvePoint]:

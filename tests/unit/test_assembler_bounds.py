@@ -122,20 +122,38 @@ def test_a_training_of_over_a_million_episodes_fits_the_record() -> None:
     assert TrainingSummary.model_validate_json(summary.model_dump_json()) == summary
 
 
-def test_too_many_training_entries_is_one_clean_message(tmp_path: Path,
-                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("batched_from", [0, 10**9])
+def test_too_many_training_entries_is_one_clean_message(monkeypatch: pytest.MonkeyPatch,
+                                                        batched_from: int) -> None:
     monkeypatch.setattr(limits, "MAX_TRAINING_ENTRIES", 100)
+    monkeypatch.setattr(training_module, "BATCHED_FROM_BYTES", batched_from)
+    monkeypatch.setattr(training_module, "BATCH_BYTES", 500)
     with pytest.raises(AssemblyError) as caught:
         assemble(EXAMPLES / CONSOLE)
     assert str(caught.value).endswith(f"{TRAINING}: metrics: the training metrics hold over 100 entries, "
                                       "past any training's")
 
 
+def test_a_large_training_file_whose_batches_do_not_read_is_read_whole(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A valid document the batches cannot cut (an array after the entries) is read as a whole,
+    once: its episodes are not counted twice."""
+    run = copy_example(tmp_path)
+    path = run / TRAINING
+    data = json.loads(path.read_text())
+    episodes = sum(1 for entry in data["metrics"] if entry["phase"] == "training")
+    path.write_text(json.dumps({"metrics": data["metrics"], "workers": [1, 2]}))
+    monkeypatch.setattr(training_module, "BATCHED_FROM_BYTES", 0)
+    monkeypatch.setattr(training_module, "BATCH_BYTES", 500)
+    training = assemble(run).training
+    assert training is not None and training.episodes == episodes
+
+
 def test_a_large_training_file_read_in_batches_gives_the_same_summary(
         monkeypatch: pytest.MonkeyPatch) -> None:
     whole = assemble(EXAMPLES / CONSOLE).training
     monkeypatch.setattr(training_module, "BATCHED_FROM_BYTES", 0)
-    monkeypatch.setattr(training_module, "BATCH_ENTRIES", 7)
+    monkeypatch.setattr(training_module, "BATCH_BYTES", 700)
     batched = assemble(EXAMPLES / CONSOLE).training
     assert batched == whole
 
@@ -145,7 +163,7 @@ def test_a_bad_entry_deep_in_a_batched_file_is_named_by_its_index(tmp_path: Path
     run = copy_example(tmp_path)
     rewrite_training(run, lambda entries: entries[23].update(completion_percentage=400))
     monkeypatch.setattr(training_module, "BATCHED_FROM_BYTES", 0)
-    monkeypatch.setattr(training_module, "BATCH_ENTRIES", 5)
+    monkeypatch.setattr(training_module, "BATCH_BYTES", 500)
     with pytest.raises(AssemblyError) as caught:
         assemble(run)
     assert str(caught.value).endswith(f"{TRAINING}: metrics[23].completion_percentage: "
