@@ -24,6 +24,11 @@ DESCRIPTIONS: dict[str, str] = {
                              "speed",
     "design-unknown": "the run's files do not describe the model's action space: its top speed, "
                       "and so its laps' pace, cannot be checked",
+    # For the organiser, set by the board's copy and rule checks; they never move a run.
+    "copied-run": "the same laps as another racer's run (the organiser decides whose it is)",
+    "near-copy": "laps within a few milliseconds of another racer's run",
+    "lookalike": "an alias that could pass for another racer's on the board",
+    "rule-changed": "a run stored before a rule was tightened: today's checks would refuse it",
 }
 
 #: How far a lap's time may stray from its end minus its start (the simulator rounds both).

@@ -99,7 +99,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 20, "the push, /me, /me/alias and the seventeen organiser routes"
+    assert len(signed) == 25, "the push, /me, /me/alias and the twenty-two organiser routes"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()
@@ -200,6 +200,33 @@ def test_the_table_and_the_bucket_outlive_the_stack(sam: dict[str, Any]) -> None
     bucket = sam["Resources"]["ArchiveBucket"]["Properties"]
     assert bucket["VersioningConfiguration"]["Status"] == "Enabled"
     assert all(bucket["PublicAccessBlockConfiguration"].values())
+
+
+def test_the_archive_expires_versions_that_are_no_longer_current(sam: dict[str, Any]) -> None:
+    rules = sam["Resources"]["ArchiveBucket"]["Properties"]["LifecycleConfiguration"]["Rules"]
+    expiring = [rule for rule in rules if rule["Status"] == "Enabled"
+                and "NoncurrentVersionExpiration" in rule]
+    assert expiring and expiring[0]["NoncurrentVersionExpiration"]["NoncurrentDays"] == {
+        "Ref": "ArchiveOldVersionDays"}
+    assert sam["Parameters"]["ArchiveOldVersionDays"]["Default"] == 30
+
+
+def test_the_api_is_throttled_logged_and_its_functions_reserved(
+        sam: dict[str, Any], cloudformation: dict[str, Any]) -> None:
+    parameters = sam["Parameters"]
+    stage = next(resource["Properties"] for resource in cloudformation["Resources"].values()
+                 if resource["Type"] == "AWS::ApiGatewayV2::Stage")
+    assert stage["DefaultRouteSettings"] == {"ThrottlingRateLimit": {"Ref": "ApiRateLimit"},
+                                             "ThrottlingBurstLimit": {"Ref": "ApiBurstLimit"}}
+    assert stage["AccessLogSettings"]["DestinationArn"] == {"Fn::GetAtt": ["ApiAccessLog", "Arn"]}
+    assert "$context.status" in stage["AccessLogSettings"]["Format"]
+    assert sam["Resources"]["ApiAccessLog"]["Properties"]["RetentionInDays"] == {"Ref": "AccessLogDays"}
+    for function, parameter in (("PushFunction", "PushConcurrency"), ("PullFunction", "PullConcurrency"),
+                                ("AdminFunction", "AdminConcurrency")):
+        reserved = sam["Resources"][function]["Properties"]["ReservedConcurrentExecutions"]
+        assert reserved["Fn::If"][1] == {"Ref": parameter}
+        assert int(parameters[parameter]["Default"]) > 0
+    assert 0 < int(parameters["ApiRateLimit"]["Default"]) <= int(parameters["ApiBurstLimit"]["Default"])
 
 
 # ---- each handler with only its template environment and its template permissions ------------
