@@ -90,8 +90,13 @@ def _files(run: Path) -> list[Path]:
     return sorted(p for p in run.rglob("*") if p.is_file() and not p.is_symlink())
 
 
+#: A file grown past this (a sparse file past every bound) is not edited again: it stays as big.
+EDITED_BYTES = 16 * 1024 * 1024
+
+
 def _pick(rng: random.Random, run: Path, suffixes: tuple[str, ...] = ()) -> Path | None:
-    files = [p for p in _files(run) if not suffixes or p.suffix in suffixes]
+    files = [p for p in _files(run) if (not suffixes or p.suffix in suffixes)
+             and p.stat().st_size <= EDITED_BYTES]
     return rng.choice(files) if files else None
 
 
@@ -292,7 +297,8 @@ def reencode_file(rng: random.Random, run: Path) -> None:
 def training_metrics(rng: random.Random, run: Path) -> None:
     """Training metrics whose figures no training has: timestamps spread over 10^9 s, an end
     time of 10^10, episode numbers past any count, copies, thousands of entries."""
-    files = [p for p in _files(run) if p.suffix == ".json" and "raining" in str(p.relative_to(run))]
+    files = [p for p in _files(run) if p.suffix == ".json" and "raining" in str(p.relative_to(run))
+             and p.stat().st_size <= EDITED_BYTES]
     if not files:
         return
     path = rng.choice(files)
