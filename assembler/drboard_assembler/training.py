@@ -74,15 +74,18 @@ class _Tally:
 
     def add(self, batch: list[_TrainingEntry]) -> None:
         self.entries += len(batch)
+        self._add_times(batch)
+        training = [e for e in batch if _is_training(e)]
+        self.episodes.extend(e.episode for e in training)
+        self.rewards.extend(e.reward_score for e in training)
+        self.completions.extend(e.completion_percentage for e in training)
+
+    def _add_times(self, batch: list[_TrainingEntry]) -> None:
         self.elapsed_ms += sum(e.elapsed_time_in_milliseconds for e in batch)
         timed = [(e.start_time or 0.0, e.metric_time or 0.0) for e in batch if _timestamps_agree(e)]
         if timed:
             self.first_start = min(self.first_start, min(start for start, _ in timed))
             self.last_end = max(self.last_end, max(end for _, end in timed))
-        training = [e for e in batch if e.phase == "training" or e.phase.strip().lower() == "training"]
-        self.episodes.extend(e.episode for e in training)
-        self.rewards.extend(e.reward_score for e in training)
-        self.completions.extend(e.completion_percentage for e in training)
 
     def duration_s(self) -> float:
         """From the first episode's start to the last one's end, by the timestamps of the entries
@@ -91,6 +94,10 @@ class _Tally:
         if self.last_end < self.first_start:
             return self.elapsed_ms / 1000
         return max(0.0, (self.last_end - self.first_start) / 1000)
+
+
+def _is_training(entry: _TrainingEntry) -> bool:
+    return entry.phase == "training" or entry.phase.strip().lower() == "training"
 
 
 def _timestamps_agree(entry: _TrainingEntry) -> bool:
