@@ -130,6 +130,11 @@ def _insights_path(board_id: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/insights/view"
 
 
+def laps_path(board_id: str) -> str:
+    """Every lap of the board's submissions, as CSV (``drboard export --laps`` reads it too)."""
+    return "/boards/" + quote(board_id, safe="") + "/laps.csv"
+
+
 def design_summary(design: Design | None) -> str:
     return _design_summary(design, sensors=True)
 
@@ -175,6 +180,7 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
         push_command=_push_command(board, endpoint, joined=join is not None), entries=entries,
         time_label=_time_label(board), best_lap_column=board.method != TimingMethod.BEST_LAP_TIME,
         next_path=next_path, insights_path=_insights_path(board.board_id),
+        laps_path=laps_path(board.board_id) if _laps_shown(board) else None,
         compare_top_path=(compare_path(board.board_id, [q.racer for q in qualified[:2]])
                           if len(qualified) >= 2 and not screen else None),
         screen_path=board_path(board.board_id) + "?screen=1")
@@ -393,6 +399,12 @@ def _race(board: BoardView) -> str:
 
 def _open(board: BoardView) -> bool:
     return board.status != BoardStatus.CLOSED
+
+
+def _laps_shown(board: BoardView) -> bool:
+    """Whether the board's laps may be downloaded: they show with the designs (a board that
+    keeps its designs private until it closes keeps its laps too)."""
+    return board.participants > 0 and (board.designs == "public" or board.status == BoardStatus.CLOSED)
 
 
 def _time_label(board: BoardView) -> str:
