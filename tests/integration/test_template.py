@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import json
 import re
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -249,12 +250,18 @@ def _resource_kind(resource: Any) -> str:
     return "table"
 
 
+#: What the pseudo parameters of a ``!Sub`` resolve to here.
+PSEUDO = {"AWS::Region": "us-east-1", "AWS::URLSuffix": "amazonaws.com", "AWS::AccountId": "123456789012"}
+
+
 def _environment(cloudformation: dict[str, Any], function: str, names: dict[str, str]) -> dict[str, str]:
     variables = cloudformation["Resources"][function]["Properties"]["Environment"]["Variables"]
     resolved = {}
     for key, value in variables.items():
         if isinstance(value, dict) and "Ref" in value:
             value = names.get(value["Ref"], value["Ref"])
+        elif isinstance(value, dict) and isinstance(value.get("Fn::Sub"), str):
+            value = re.sub(r"\$\{([^}]+)\}", lambda m: (names | PSEUDO).get(m[1], m[1]), value["Fn::Sub"])
         resolved[key] = str(value)
     return resolved
 
@@ -283,7 +290,7 @@ def deployed(aws: CallRecorder, sam: dict[str, Any]) -> dict[str, str]:
     """The names Refs resolve to: the resources made on moto, and the parameters' defaults."""
     names = {name: str(p["Default"]) for name, p in sam.get("Parameters", {}).items()}
     names |= {"BoardTable": "drboard-BoardTable", "ArchiveBucket": "drboard-archive"}
-    create_board_table(boto3.client("dynamodb"), names["BoardTable"])
+    create_board_table(boto3.client("dynamodb"), names["BoardTable"], stream=True)
     boto3.client("s3").create_bucket(Bucket=names["ArchiveBucket"])
     aws.calls.clear()
     return names
@@ -399,3 +406,83 @@ def test_the_racer_routes_read_with_the_pull_functions_permissions(
     used = set(aws.calls)
     assert ("dynamodb:Query", "index") in used, "a racer's history is one query of the by_racer index"
     assert used <= _granted(cloudformation, "PullFunction")
+
+
+# ---- the announcer: the table's stream of changes, as Lambda hands it to the NotifyFunction ----
+
+
+def _stream_records(table: str) -> list[dict[str, Any]]:
+    """Every record of the table's stream so far (moto's), as the event source mapping hands
+    them to a function: with the stream's ARN, and the creation time in epoch seconds."""
+    client = boto3.client("dynamodbstreams", endpoint_url="https://streams.dynamodb.us-east-1.amazonaws.com/")
+    (stream,) = client.list_streams(TableName=table)["Streams"]
+    arn = stream["StreamArn"]
+    records = []
+    for shard in client.describe_stream(StreamArn=arn)["StreamDescription"]["Shards"]:
+        iterator = client.get_shard_iterator(StreamArn=arn, ShardId=shard["ShardId"],
+                                             ShardIteratorType="TRIM_HORIZON")["ShardIterator"]
+        for record in client.get_records(ShardIterator=iterator)["Records"]:
+            change = dict(record["dynamodb"])
+            created = change.get("ApproximateCreationDateTime")
+            if created is not None:
+                change["ApproximateCreationDateTime"] = created.timestamp()
+            records.append({**record, "dynamodb": change, "eventSourceARN": arn})
+    return records
+
+
+def _matches(pattern: Any, value: Any) -> bool:
+    """Whether an event matches an EventBridge-style filter pattern (the shapes the template's
+    FilterCriteria use: nested keys, lists of values or of ``{"prefix": ...}``)."""
+    if isinstance(pattern, dict):
+        return isinstance(value, dict) and all(name in value and _matches(inner, value[name])
+                                               for name, inner in pattern.items())
+    return any(value.startswith(option["prefix"]) if isinstance(option, dict) else value == option
+               for option in pattern)
+
+
+def test_notify_announces_the_streams_entry_changes_with_its_template_environment_and_permissions(
+    sam: dict[str, Any], cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from drboard_functions import services
+    from drboard_functions.handlers import notify, wiring
+    from drboard_functions.models.notices import WebhookSpec
+
+    from tests.recordkit import make_record
+    from tests.unit.test_announcements import FakeChat
+
+    _isolate(monkeypatch, _environment(cloudformation, "PushFunction", deployed))
+    assert _invoke("push", "push.json")["statusCode"] == 201  # before the webhook: not announced
+    board = json.loads((EVENTS / "push.json").read_text())["pathParameters"]["board"]
+    time.sleep(1.01 - time.time() % 1)  # the stream's times are whole seconds: the next one
+    chat = FakeChat()
+    try:
+        service = services.dynamodb_service(deployed["BoardTable"])
+        service.add_webhook(board, WebhookSpec(kind="json", url=chat.url))
+        service.push(make_record("Blaze", [(5000, 100)], model="blaze-v2"), board)
+        pattern = json.loads(sam["Resources"]["NotifyFunction"]["Properties"]["Events"]["EntryChanges"]
+                             ["Properties"]["FilterCriteria"]["Filters"][0]["Pattern"])
+        records = [r for r in _stream_records(deployed["BoardTable"]) if _matches(pattern, r)]
+        assert {r["dynamodb"]["Keys"]["sk"]["S"][:2] for r in records} == {"R#"}, "entries only"
+        assert len(records) == 2, "each push's entry"
+        aws.calls.clear()
+
+        environment = _environment(cloudformation, "NotifyFunction", deployed)
+        assert environment["BOARD_URL"].startswith("https://")
+        _isolate(monkeypatch, environment)
+        wiring.service_from_environment.cache_clear()
+        wiring.notifier_from_environment.cache_clear()
+        answer = notify.lambda_handler({"Records": records}, LocalContext())
+        assert answer == {"batchItemFailures": []}
+        (body,) = chat.bodies
+        assert body["event"] == "new-leader" and body["announcement"]["racer"] == "Blaze"
+        assert body["text"].endswith(environment["BOARD_URL"] + f"/boards/{board}/view")
+        used = set(aws.calls)
+        granted = _granted(cloudformation, "NotifyFunction")
+        assert used <= granted, f"calls not allowed by the template: {used - granted}"
+        assert ("dynamodb:PutItem", "table") in used, "the sent marker"
+
+        retried = notify.lambda_handler({"Records": records}, LocalContext())
+        assert retried == {"batchItemFailures": []} and len(chat.bodies) == 1, "sent once"
+    finally:
+        chat.close()

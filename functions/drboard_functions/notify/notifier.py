@@ -68,7 +68,10 @@ class Notifier:
         failures = []
         for target in targets_of(announcement.board_id):
             for webhook in self.store.webhooks(target.key):
-                if announcement.kind not in webhook.events or webhook.created_at > announcement.at:
+                # A webhook hears what happens from when it was added; the stream's times are
+                # whole seconds (rounded down), so from the second it was added.
+                if (announcement.kind not in webhook.events
+                        or webhook.created_at.replace(microsecond=0) > announcement.at):
                     continue
                 error = self._deliver(webhook, announcement)
                 if error:
