@@ -29,7 +29,7 @@ COGNITO_PREFIX = "/cognito"
 
 ROOT = Path(__file__).parents[2]
 EVENTS = ROOT / "events"
-FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull", "AdminFunction": "admin"}
+FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull", "AdminFunction": "admin", "CardFunction": "card"}
 
 
 @pytest.fixture(scope="module")
@@ -51,9 +51,9 @@ def cloudformation(sam: dict[str, Any]) -> dict[str, Any]:
 
 def _app_operations(kind: str) -> dict[tuple[str, str], dict[str, Any]]:
     """(METHOD, path) -> OpenAPI operation of the routes the function's resolver serves."""
-    from drboard_functions.routes import admin_router, build_app, pull_router, push_router
+    from drboard_functions.routes import admin_router, build_app, card_router, pull_router, push_router
 
-    router = {"push": push_router, "pull": pull_router, "admin": admin_router}[kind]
+    router = {"push": push_router, "pull": pull_router, "admin": admin_router, "card": card_router}[kind]
     paths = json.loads(build_app(router).get_openapi_json_schema())["paths"]
     return {(method.upper(), path): operation for path, methods in paths.items()
             for method, operation in methods.items()}
@@ -299,10 +299,10 @@ def deployed(aws: CallRecorder, sam: dict[str, Any]) -> dict[str, str]:
 def _invoke(kind: str, event_file: str, query: dict[str, str] | None = None) -> dict[str, Any]:
     """Run a function's handler on an example event (with this query string instead, if given),
     as a fresh container would: the wiring reads the environment again."""
-    from drboard_functions.handlers import admin, pull, push, wiring
+    from drboard_functions.handlers import admin, card, pull, push, wiring
 
     wiring.service_from_environment.cache_clear()
-    handler = {"push": push, "pull": pull, "admin": admin}[kind].lambda_handler
+    handler = {"push": push, "pull": pull, "admin": admin, "card": card}[kind].lambda_handler
     event = json.loads((EVENTS / event_file).read_text())
     if query is not None:
         event["queryStringParameters"] = query
@@ -389,6 +389,23 @@ def test_admin_works_with_its_template_environment_and_permissions(
     assert {action for action, _ in used} == {action for action, _ in granted}, (
         "least privilege: every action granted is one the organiser routes use")
     assert ("dynamodb:BatchGetItem", "table") in used
+
+
+def test_the_card_function_draws_a_card_with_its_template_environment_and_permissions(
+    cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _isolate(monkeypatch, _environment(cloudformation, "PushFunction", deployed))
+    assert _invoke("push", "push.json")["statusCode"] == 201
+    aws.calls.clear()
+    _isolate(monkeypatch, _environment(cloudformation, "CardFunction", deployed))
+    result = _invoke("card", "card_racer.json")
+    assert result["statusCode"] == 200, result["body"][:300]
+    assert result["headers"]["Content-Type"] == "image/png"
+    used = set(aws.calls)
+    assert used and used <= _granted(cloudformation, "CardFunction"), used
+    assert not any(action.startswith(("s3:", "dynamodb:Put", "dynamodb:Update"))
+                   for action, _ in _granted(cloudformation, "CardFunction")), "cards only read"
 
 
 def test_the_racer_routes_read_with_the_pull_functions_permissions(

@@ -70,6 +70,8 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("GET", "/boards/{board}/webhooks"),
         ("DELETE", "/boards/{board}/webhooks/{webhook}"),
         ("POST", "/boards/{board}/webhooks/{webhook}/test"),
+        ("GET", "/boards/{board}/racers/{racer}/card.svg"),
+        ("GET", "/boards/{board}/racers/{racer}/card.png"),
     }
 
 
