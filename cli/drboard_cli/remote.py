@@ -21,7 +21,7 @@ import urllib.parse
 import urllib.request
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
@@ -122,6 +122,11 @@ class HttpBoard:
                                 else LAP_COLUMNS)
         rows = [dict(row) for row in reader]
         return LapsPage(board_id, rows, _next_cursor((answer.headers or {}).get("Link", "")))
+
+    def racer_card(self, board_id: str, racer: str, kind: Literal["png", "svg"]) -> bytes:
+        """The racer's result card, as the board draws it."""
+        path = f"/boards/{_quote(board_id)}/racers/{_quote(racer)}/card.{kind}"
+        return bytes(self._call("GET", path, binary=True).body)
 
     # ---- organisers (always signed) -------------------------------------------------------
 
@@ -228,8 +233,10 @@ class HttpBoard:
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: Mapping[str, str | list[str] | None] | None = None,
-              signed: bool = False, token: str | None = None, text: bool = False) -> Answer:
-        """One request; the answer's JSON (its UTF-8 text with ``text``) and headers."""
+              signed: bool = False, token: str | None = None, text: bool = False,
+              binary: bool = False) -> Answer:
+        """One request; the answer's JSON (its UTF-8 text with ``text``, its bytes with
+        ``binary``) and headers."""
         given = {name: value for name, value in (query or {}).items() if value}
         token = token or (fresh_token(self.endpoint) if signed else None)
         prefix = tokens.route_prefix(token) if token else ""
@@ -247,8 +254,8 @@ class HttpBoard:
         try:
             with urllib.request.urlopen(request, timeout=self.timeout_s) as response:
                 data = response.read()
-                return Answer(response.status, data.decode("utf-8") if text else _json(data, url),
-                              response.headers)
+                body = data if binary else data.decode("utf-8") if text else _json(data, url)
+                return Answer(response.status, body, response.headers)
         except urllib.error.HTTPError as error:
             raise _domain_error(error, url) from None
         except (urllib.error.URLError, TimeoutError, ConnectionError) as error:

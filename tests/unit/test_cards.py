@@ -181,3 +181,24 @@ def test_racer_svg_escapes_what_racers_write() -> None:
     svg = racer_svg(card)
     assert "<script>" not in svg and "&lt;script&gt;" in svg
     assert {"a & b", "<script>x</script>", 'm"1'} <= set(texts(svg))
+
+
+def test_drboard_card_saves_the_racers_card_from_the_embedded_board(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+    from drboard_cli.main import cli
+
+    db = tmp_path / "board.db"
+    store = SqliteStore(db)
+    LeaderboardService(store).push(make_record("Ada", [(9120, 100)], model="ada-v7"))
+    store.close()
+    runner = CliRunner()
+    with runner.isolated_filesystem(temp_dir=tmp_path):
+        saved = runner.invoke(cli, ["--db", str(db), "card", "Ada", "--track", "reInvent2019"])
+        assert saved.exit_code == 0, saved.output
+        assert png_size(Path("Ada-reInvent2019_track.png").read_bytes()) == (1200, 630)
+        source = runner.invoke(cli, ["--db", str(db), "card", "Ada", "--track", "reInvent2019",
+                                     "--format", "svg", "-o", "ada.svg"])
+        assert source.exit_code == 0, source.output
+        assert {"Ada", "ada-v7", "9.120 s", "#1"} <= set(texts(Path("ada.svg").read_text("utf-8")))
+        missing = runner.invoke(cli, ["--db", str(db), "card", "Nobody", "--track", "reInvent2019"])
+        assert missing.exit_code == 1 and "Nobody" in missing.output

@@ -64,8 +64,9 @@ def racer_card(view: RacerView, runner_up: EntryView | None = None) -> RacerCard
         result, label, said = f"{percent(entry.best_completion_pct)} done", "best completion", ""
     status = {BoardStatus.CLOSED: "final standings", BoardStatus.UPCOMING: "not open yet"}.get(
         board.status, "live standings")
+    track = "" if board.track_name == board.title else f"{board.track_name} · "
     return RacerCard(
-        board_title=board.title, subtitle=f"{board.track_name} · {_RESULT[board.method]} · {status}",
+        board_title=board.title, subtitle=f"{track}{_RESULT[board.method]} · {status}",
         rank=entry.rank, field=board.participants, racer=entry.racer, model_name=entry.model_name,
         result=result, result_label=label, gap=said, leads=entry.qualified and entry.rank == 1,
         date=entry.submitted_at.strftime("%Y-%m-%d"))

@@ -14,7 +14,6 @@ from typing import Any
 
 from aws_lambda_powertools.event_handler import Response
 
-from ..service import LeaderboardService
 from .params import BoardId, IfNoneMatch, RacerAlias, Service, card_router, segment
 from .responses import BAD_PATH, api_version, error_response
 
@@ -30,17 +29,6 @@ def card_response(kind: str) -> Any:
     schema = {"type": "string", "format": "binary"} if kind == "png" else {"type": "string"}
     return {"description": f"The card, {SIZE} ({kind.upper()}), with an ETag.",
             "content": {{"svg": SVG, "png": PNG}[kind]: {"schema": schema}}}
-
-
-def racer_card_svg_of(service: LeaderboardService, board_id: str, racer: str) -> str:
-    from .. import cards
-
-    view = service.racer(board_id, racer, 1)
-    runner_up = None
-    if view.entry.rank == 1 and view.entry.qualified:
-        second = service.board_page(board_id, limit=2, cursor=None).entries[1:]
-        runner_up = second[0] if second else None
-    return cards.racer_svg(cards.racer_card(view, runner_up))
 
 
 def card_answer(svg: str, kind: str, if_none_match: str | None) -> Response[str]:
@@ -79,7 +67,7 @@ def _responses(kind: str) -> Any:
 )
 def racer_card_svg(board: BoardId, racer: RacerAlias, service: Service,
                    if_none_match: IfNoneMatch = None) -> Response[str]:
-    return card_answer(racer_card_svg_of(service, segment(board), segment(racer)), "svg", if_none_match)
+    return card_answer(service.racer_card_svg(segment(board), segment(racer)), "svg", if_none_match)
 
 
 @card_router.get(
@@ -92,4 +80,4 @@ def racer_card_svg(board: BoardId, racer: RacerAlias, service: Service,
 )
 def racer_card_png(board: BoardId, racer: RacerAlias, service: Service,
                    if_none_match: IfNoneMatch = None) -> Response[str]:
-    return card_answer(racer_card_svg_of(service, segment(board), segment(racer)), "png", if_none_match)
+    return card_answer(service.racer_card_svg(segment(board), segment(racer)), "png", if_none_match)

@@ -5,8 +5,8 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading), ``transfer`` (export and import), ``results`` (laps to analyse) and
-``webhooks`` (the chat's announcements).
+trail's reading), ``transfer`` (export and import), ``results`` (laps to analyse),
+``sharing`` (result cards) and ``webhooks`` (the chat's announcements).
 :class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
@@ -33,6 +33,7 @@ from .paging import DEFAULT_PAGE
 from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
 from .results import LAPS_PAGE, Results
+from .sharing import Sharing
 from .transfer import Transfer
 from .webhooks import Webhooks
 
@@ -75,6 +76,7 @@ class LeaderboardService:
         self._transfer = Transfer(keeper, archive)
         self._results = Results(keeper)
         self._webhooks = Webhooks(keeper)
+        self._sharing = Sharing(self._reading)
         self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
@@ -110,6 +112,9 @@ class LeaderboardService:
 
     laps_page = _handed_to("_results", Results.laps_page)
     run_laps = _handed_to("_results", Results.run_laps)
+
+    racer_card_svg = _handed_to("_sharing", Sharing.racer_card_svg)
+    racer_card = _handed_to("_sharing", Sharing.racer_card)
 
     add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
     webhooks = _handed_to("_webhooks", Webhooks.webhooks)
