@@ -24,7 +24,7 @@ UNUSED = aws_lambda_powertools/event_handler/openapi/swagger_ui/*.js \
 # integrations other than botocore's, pydantic.v1, pydantic.experimental and pydantic's mypy
 # plugin stay source-only, which keeps the bundle small.
 # bench/bench_functions.py counts the modules a cold start still compiles (should be none).
-PRECOMPILED = drboard_assembler drboard_functions segno jinja2 markupsafe typing_extensions.py annotated_types \
+PRECOMPILED = drboard_assembler drboard_functions segno regex disarm jinja2 markupsafe typing_extensions.py annotated_types \
 	typing_inspection pydantic pydantic_core wrapt aws_xray_sdk/*.py aws_xray_sdk/core \
 	aws_xray_sdk/ext/*.py aws_xray_sdk/ext/botocore aws_lambda_powertools/*.py \
 	aws_lambda_powertools/event_handler aws_lambda_powertools/exceptions \

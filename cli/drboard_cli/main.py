@@ -38,22 +38,23 @@ BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardM
 FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "WebhookNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
                             "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
-                            "StoreUnavailable"})
+                            "StoreUnavailable", "StoreFailed"})
 
 
 @cache
 def out() -> Console:
-    """Standard output (rich finds the stream at each print, so tests may swap it)."""
-    from rich.console import Console
+    """Standard output (rich finds the stream at each print, so tests may swap it). Control
+    characters in what it prints are escaped (see :mod:`.terminal`)."""
+    from .terminal import console
 
-    return Console(highlight=False)
+    return console()
 
 
 @cache
 def err() -> Console:
-    from rich.console import Console
+    from .terminal import console
 
-    return Console(stderr=True, highlight=False)
+    return console(stderr=True)
 
 
 BoardOpener = Callable[[Path], "BoardClient"]
@@ -112,7 +113,10 @@ pass_context = click.make_pass_decorator(Context)
 def fail(message: str, code: int) -> None:
     """One line on standard error, then exit with ``code``. Printed with click, not rich: an
     error answers without loading rich's console."""
-    click.echo(f"{click.style('error:', fg='red', bold=True)} {' '.join(message.split())}", err=True)
+    from .terminal import printable
+
+    click.echo(f"{click.style('error:', fg='red', bold=True)} {printable(' '.join(message.split()))}",
+               err=True)
     sys.exit(code)
 
 
@@ -196,6 +200,11 @@ COMMANDS: dict[str, LazyCommand] = {
                                        "another board."),
           ("import", "import_command", "Load a `drboard export` file into this board; importing "
                                        "twice changes nothing.")),
+    **_at("aliases",
+          ("aliases", "aliases_group", "Organisers: reserve racers' aliases, give one to a "
+                                      "sign-in, release one."),
+          ("invite", "invite", "Invite racers to a deployed board: a user each, their alias kept "
+                               "for them.")),
     **_at("account",
           ("alias", "alias", "Claim NAME as the racer alias you push as, or show the one you hold."),
           ("configure", "configure", "Choose the board the commands talk to, and save it in your "

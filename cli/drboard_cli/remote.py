@@ -28,9 +28,17 @@ from drboard_functions import errors
 from drboard_functions.laps import LAP_COLUMNS
 from drboard_functions.models.domain import MAX_PAGE, Board
 from drboard_functions.models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
-from drboard_functions.models.requests import AliasRequest, BoardChanges, BoardSpec, ImportedSubmission
+from drboard_functions.models.requests import (
+    AliasAssignment,
+    AliasRequest,
+    BoardChanges,
+    BoardSpec,
+    ImportedSubmission,
+)
 from drboard_functions.models.transfer import ExportPage, ImportReceipt
 from drboard_functions.models.views import (
+    AliasList,
+    AliasView,
     AuditPage,
     BoardList,
     BoardPage,
@@ -40,11 +48,13 @@ from drboard_functions.models.views import (
     Insights,
     Me,
     Moderation,
+    PushAccepted,
     PushReceipt,
     RacerHistory,
     RacerSummary,
     RacerView,
     RankCounters,
+    RecheckPage,
 )
 from drboard_functions.service import default_board_id
 from drboard_functions.service.results import LapsPage
@@ -76,9 +86,11 @@ class HttpBoard:
 
     # ---- racers -------------------------------------------------------------------------
 
-    def push(self, record: Record, board_id: str | None) -> PushReceipt:
+    def push(self, record: Record, board_id: str | None) -> PushReceipt | PushAccepted:
         board = board_id or default_board_id(record.track, record.direction, record.race_type)
         answer = self._call("POST", f"/boards/{_quote(board)}/submissions", body=record, signed=True)
+        if answer.status == 202:  # stored; its rank could not be read back just then
+            return _parse(PushAccepted, answer)
         return _parse(PushReceipt, answer)
 
     def boards(self) -> list[BoardView]:
@@ -187,9 +199,10 @@ class HttpBoard:
         path = f"/boards/{_quote(board_id)}/racers/{_quote(racer)}"
         return _parse(Moderation, self._call("DELETE", path, signed=True))
 
-    def ban(self, board_id: str, racer: str) -> Moderation:
+    def ban(self, board_id: str, racer: str, *, everywhere: bool = True) -> Moderation:
         path = f"/boards/{_quote(board_id)}/bans/{_quote(racer)}"
-        return _parse(Moderation, self._call("PUT", path, signed=True))
+        query = {"scope": "event" if everywhere else "board"}
+        return _parse(Moderation, self._call("PUT", path, query=query, signed=True))
 
     def unban(self, board_id: str, racer: str) -> Moderation:
         path = f"/boards/{_quote(board_id)}/bans/{_quote(racer)}"
@@ -200,6 +213,30 @@ class HttpBoard:
                             query={"cursor": cursor, "limit": str(limit)}, signed=True)
         return _parse(AuditPage, answer)
 
+    def recheck_page(self, board_id: str, cursor: str | None) -> RecheckPage:
+        answer = self._call("POST", f"/boards/{_quote(board_id)}/recheck", query={"cursor": cursor},
+                            signed=True)
+        return _parse(RecheckPage, answer)
+
+    # ---- aliases (organisers) -------------------------------------------------------------
+
+    def aliases(self, limit: int, cursor: str | None) -> AliasList:
+        answer = self._call("GET", "/aliases", query={"limit": str(limit), "cursor": cursor},
+                            signed=True)
+        return _parse(AliasList, answer)
+
+    def assign_alias(self, alias: str, principal: str | None, replace: bool) -> AliasView:
+        answer = self._call("PUT", f"/aliases/{_quote(alias)}", body=AliasAssignment(principal=principal),
+                            query={"replace": "true" if replace else None}, signed=True)
+        return _parse(AliasView, answer)
+
+    def release_alias(self, alias: str) -> AliasView:
+        return _parse(AliasView, self._call("DELETE", f"/aliases/{_quote(alias)}", signed=True))
+
+    def alias_audit(self, cursor: str | None, limit: int) -> AuditPage:
+        answer = self._call("GET", "/aliases/audit", query={"cursor": cursor, "limit": str(limit)},
+                            signed=True)
+        return _parse(AuditPage, answer)
     def add_webhook(self, board_id: str, spec: WebhookSpec) -> WebhookView:
         answer = self._call("POST", f"/boards/{_quote(board_id)}/webhooks", body=spec, signed=True)
         return _parse(WebhookView, answer)

@@ -1,4 +1,10 @@
-"""How results look: rich tables for people, JSON, CSV and Markdown for scripts and posts."""
+"""How results look: rich tables for people, JSON, CSV and Markdown for scripts and posts.
+
+What the board stores is text, never markup: every table cell and title goes to rich as a
+``Text`` (a racer named ``[link=…]`` is shown as written), and the consoles escape control
+characters (:mod:`.terminal`). A CSV cell that a spreadsheet would take for a formula is
+neutralised (:func:`csv_cell`).
+"""
 
 from __future__ import annotations
 
@@ -24,16 +30,20 @@ from drboard_functions.display import (
 )
 from drboard_functions.flags import DESCRIPTIONS
 from drboard_functions.insights import LABELS, fact_text
+from drboard_functions.laps import cell as formula_safe
 from drboard_functions.models.domain import AuditEvent, BoardStatus, Design
 from drboard_functions.models.views import (
+    AliasView,
     BoardPage,
     BoardView,
     Comparison,
     EntryView,
+    FlaggedRun,
     HistoryItem,
     Insights,
     Me,
     Moderation,
+    PushAccepted,
     PushReceipt,
     RacerStatus,
     RacerSummary,
@@ -45,10 +55,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 from rich.text import Text
 
+from .invite import Invited
+from .terminal import printable
 from .transfer import ExportCounts, ImportSummary
 
 #: Beside a run the board's consistency checks flagged (`drboard show` says which checks).
 FLAG_MARK = "⚑"
+
+
+def _row(table: Table, *cells: Text | str, **options: Any) -> None:
+    """A table row whose text cells are plain text, never rich markup."""
+    table.add_row(*(Text(cell) if isinstance(cell, str) else cell for cell in cells), **options)
 
 
 def _time_label(entry: EntryView) -> str:
@@ -66,7 +83,8 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     caption = f"{board.participants} racers · {method_label(board)}"
     if any(entry.flags for entry in page.entries):
         caption += f" · {FLAG_MARK} flagged by the board's checks"
-    table = Table(title=f"{board.title} · {board.board_id}", caption=caption, header_style="bold")
+    table = Table(title=Text(f"{board.title} · {board.board_id}"), caption=Text(caption),
+                  header_style="bold")
     table.add_column("Rank", justify="right")
     table.add_column("Racer", overflow="fold")
     if wide:
@@ -85,7 +103,7 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
                   design_summary(entry.design)]
         if wide:
             cells.append(entry.submitted_at.strftime("%b %d %H:%M"))
-        table.add_row(*cells, style=None if entry.qualified else "dim")
+        _row(table, *cells, style=None if entry.qualified else "dim")
     return table
 
 
@@ -105,7 +123,7 @@ def boards_table(boards: list[BoardView], width: int = 120) -> Table:
     """Each board's id and title, track, timing, status and window; on a narrow terminal the
     title gives way and the window goes under the status."""
     wide = width >= 110
-    table = Table(title="Boards", header_style="bold")
+    table = Table(title=Text("Boards"), header_style="bold")
     table.add_column("Board", no_wrap=True)  # ids are typed in other commands: never cut
     columns = ("Track", "Method", "Status", "Opens", "Closes") if wide else ("Track", "Method", "Status")
     for name in columns:
@@ -118,7 +136,7 @@ def boards_table(boards: list[BoardView], width: int = 120) -> Table:
             cells += [_status_label(board), when(board.opens_at), when(board.closes_at)]
         else:
             cells.append(_status_label(board) + _window_label(board))
-        table.add_row(*cells, str(board.participants))
+        _row(table, *cells, str(board.participants))
     return table
 
 
@@ -139,20 +157,20 @@ def board_panel(board: BoardView) -> Panel:
     grid = Table.grid(padding=(0, 2))
     grid.add_column(style="bold")
     grid.add_column()
-    grid.add_row("Status", _status_label(board))
-    grid.add_row("Track", Text(f"{_track_label(board)} ({board.track})"))
-    grid.add_row("Timing", method_label(board))
-    grid.add_row("Flagged runs", "rank" if board.flagged_runs == "rank"
+    _row(grid, "Status", _status_label(board))
+    _row(grid, "Track", Text(f"{_track_label(board)} ({board.track})"))
+    _row(grid, "Timing", method_label(board))
+    _row(grid, "Flagged runs", "rank" if board.flagged_runs == "rank"
                  else "shown below the qualified racers, unranked")
-    grid.add_row("Opens", when(board.opens_at) if board.opens_at else "when created")
-    grid.add_row("Closes", when(board.closes_at) if board.closes_at else "never")
+    _row(grid, "Opens", when(board.opens_at) if board.opens_at else "when created")
+    _row(grid, "Closes", when(board.closes_at) if board.closes_at else "never")
     cooldown = f"{duration(board.cooldown_s)} between a racer's submissions" if board.cooldown_s else "none"
-    grid.add_row("Cooldown", cooldown)
+    _row(grid, "Cooldown", cooldown)
     cap = board.max_submissions
-    grid.add_row("Submissions", f"at most {cap} per racer" if cap else "unlimited")
-    grid.add_row("Racers", str(board.participants))
+    _row(grid, "Submissions", f"at most {cap} per racer" if cap else "unlimited")
+    _row(grid, "Racers", str(board.participants))
     if board.description:
-        grid.add_row("Description", Text(board.description))
+        _row(grid, "Description", Text(board.description))
     kind = "named board" if board.kind == "named" else "track's default board"
     return Panel(grid, title=Text(f"{board.title} · {board.board_id}", style="bold"), subtitle=kind,
                  expand=False)
@@ -215,12 +233,27 @@ def _flat_design(design: Design | None) -> dict[str, Any]:
             "max_steering": design.max_steering}
 
 
-def board_csv(page: BoardPage) -> str:
+def csv_cell(value: Any) -> Any:
+    """A CSV cell as a spreadsheet should read it: text starting like a formula (``=``, ``+``,
+    ``-``, ``@``, a tab or a carriage return) gets a leading ``'`` (the rule of
+    :func:`drboard_functions.laps.cell`, which the laps' CSV uses too), and control characters
+    are escaped; numbers are written as they are."""
+    if not isinstance(value, str):
+        return value
+    return formula_safe(printable(value))
+
+
+def write_csv(rows: Iterable[dict[str, Any]], fields: list[str]) -> str:
+    """CSV text of the rows, every cell through :func:`csv_cell`: the one way drboard writes CSV."""
     out = io.StringIO()
-    writer = csv.DictWriter(out, fieldnames=CSV_FIELDS, lineterminator="\n")
+    writer = csv.DictWriter(out, fieldnames=fields, lineterminator="\n")
     writer.writeheader()
-    writer.writerows(_flat(entry) for entry in page.entries)
+    writer.writerows({name: csv_cell(value) for name, value in row.items()} for row in rows)
     return out.getvalue()
+
+
+def board_csv(page: BoardPage) -> str:
+    return write_csv((_flat(entry) for entry in page.entries), CSV_FIELDS)
 
 
 def board_markdown(page: BoardPage) -> str:
@@ -233,17 +266,28 @@ def board_markdown(page: BoardPage) -> str:
         cells = [str(entry.rank), entry.racer, entry.model_name, _time_label(entry),
                  gap(entry.gap_ms), str(entry.laps_completed), design_summary(entry.design)]
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
-    return "\n".join(lines) + "\n"
+    return printable("\n".join(lines) + "\n")
 
 
 def board_json(page: BoardPage) -> str:
-    return page.model_dump_json(indent=2) + "\n"
+    return json_text(page.model_dump_json(indent=2) + "\n")
+
+
+def json_text(text: str) -> str:
+    """JSON text as a terminal may show it: a control or bidirectional character inside a
+    string is written as its ``\\uXXXX`` escape (the same JSON once parsed)."""
+    return printable(text)
 
 
 # ---- push, history, show ---------------------------------------------------------------------
 
 
-def receipt_line(receipt: PushReceipt) -> Text:
+def receipt_line(receipt: PushReceipt | PushAccepted) -> Text:
+    if isinstance(receipt, PushAccepted):
+        text = Text()
+        text.append(receipt.racer, style="bold")
+        text.append(f" · {receipt.board_id} · {receipt.message}", style="yellow")
+        return text
     entry = receipt.entry
     pushed = receipt.submission
     result = seconds(pushed.time_ms) if pushed.qualified else (
@@ -266,7 +310,7 @@ def receipt_line(receipt: PushReceipt) -> Text:
 def history_table(racer: str, items: Iterable[HistoryItem], width: int = 120) -> Table:
     """The racer's submissions; on a narrow terminal the date is shorter and the best lap goes."""
     wide = width >= 100
-    table = Table(title=f"History of {racer}", header_style="bold")
+    table = Table(title=Text(f"History of {racer}"), header_style="bold")
     table.add_column("Submitted", no_wrap=True)
     table.add_column("Board", no_wrap=True)
     table.add_column("Model", no_wrap=True, overflow="ellipsis")
@@ -281,7 +325,7 @@ def history_table(racer: str, items: Iterable[HistoryItem], width: int = 120) ->
                  item.board_id, item.model_name, result]
         if wide:
             cells.append(seconds(item.best_lap_ms))
-        table.add_row(*cells, str(item.laps_completed), "★" if item.is_best else "")
+        _row(table, *cells, str(item.laps_completed), "★" if item.is_best else "")
     return table
 
 
@@ -290,7 +334,10 @@ def moderation_line(moderation: Moderation, action: str) -> Text:
     said = {
         "remove-entry": (f"Took {moderation.racer} off {board.board_id}." if moderation.entry_removed
                          else f"{moderation.racer} had no entry on {board.board_id}."),
-        "ban": f"Banned {moderation.racer} from {board.board_id}: their pushes are refused.",
+        "ban": (f"Banned {moderation.racer} from "
+                + ("every board of this event" if moderation.everywhere else board.board_id)
+                + (f" (and their sign-in {moderation.principal}, under any alias)"
+                   if moderation.principal else "") + ": their pushes are refused."),
         "unban": f"{moderation.racer} may push to {board.board_id} again.",
     }[action]
     return Text(f"{said} {plural(board.participants, 'racer')} on the board; every submission "
@@ -303,7 +350,7 @@ def audit_table(board_id: str, events: Iterable[AuditEvent], width: int = 120) -
     events = list(events)
     aliases = {event.actor: event.racer for event in events if event.action == "push" and event.racer}
     wide = width >= 100
-    table = Table(title=f"Audit trail of {board_id}", header_style="bold")
+    table = Table(title=Text(f"Audit trail of {board_id}"), header_style="bold")
     table.add_column("When (UTC)", no_wrap=True)
     table.add_column("Action", no_wrap=True)
     table.add_column("Who")
@@ -318,7 +365,7 @@ def audit_table(board_id: str, events: Iterable[AuditEvent], width: int = 120) -
         if wide:
             cells.append((event.submission_id or "")[:12])
         cells.append(audit_detail(event))
-        table.add_row(*cells)
+        _row(table, *cells)
     return table
 
 
@@ -371,6 +418,47 @@ def _setting_text(name: str, value: Any) -> str:
     return str(value)
 
 
+def alias_table(views: Iterable[AliasView], title: str = "Aliases") -> Table:
+    table = Table(title=Text(title), header_style="bold")
+    for name in ("Alias", "Held by", "Since (UTC)"):
+        table.add_column(name, overflow="fold")
+    for view in views:
+        holder = "reserved for its racer" if view.reserved else view.principal
+        _row(table, view.alias, holder, view.claimed_at.astimezone(UTC).strftime("%Y-%m-%d %H:%M"))
+    return table
+
+
+def invite_table(done: Iterable[Invited]) -> Table:
+    table = Table(title=Text("Invited racers"), header_style="bold")
+    for name in ("E-mail", "Alias", "User", "Alias is", "Problem"):
+        table.add_column(name, overflow="fold")
+    users = {"created": "invited now", "existed": "was there", "failed": "not created"}
+    aliases = {"theirs": "theirs", "held": "another's", "failed": "not given"}
+    for result in done:
+        _row(table, result.racer.email, result.racer.alias, users[result.user],
+             aliases[result.alias], result.problem, style=None if result.ok else "yellow")
+    return table
+
+
+def invite_summary(done: list[Invited]) -> Text:
+    created = sum(result.user == "created" for result in done)
+    existed = sum(result.user == "existed" for result in done)
+    problems = sum(not result.ok for result in done)
+    return Text(f"{plural(created, 'racer')} invited, {existed} already users, "
+                f"{plural(problems, 'problem')}; every invited racer's alias is theirs"
+                if not problems else
+                f"{plural(created, 'racer')} invited, {existed} already users, "
+                f"{plural(problems, 'racer')} not done (see the table): run it again once fixed")
+
+
+def recheck_line(board_id: str, checked: int, flagged: list[FlaggedRun]) -> Text:
+    text = Text(f"Rechecked {board_id}: {plural(checked, 'submission')}, ")
+    text.append(f"{plural(len(flagged), 'run')} flagged for you", style="yellow" if flagged else "")
+    for run in flagged:
+        text.append(f"\n  {FLAG_MARK} {run.racer} · {run.flag}: {run.why}")
+    return text
+
+
 def me_line(me: Me) -> Text:
     role = "an organiser" if me.organiser else "a racer"
     alias = f"you push as {me.alias}" if me.alias else "no alias yet (your first push claims one)"
@@ -404,7 +492,7 @@ def status_table(summary: RacerSummary, width: int = 120) -> Table:
         ]
         cells += [rank, gap(status.entry.gap_ms)] if wide else [f"{rank}\n{gap(status.entry.gap_ms)}"]
         cells += [_submissions_label(status), next_submission(status)]
-        table.add_row(*cells)
+        _row(table, *cells)
     return table
 
 
@@ -453,53 +541,54 @@ def racer_panel(view: RacerView) -> Group:
     summary = Table.grid(padding=(0, 2))
     summary.add_column(style="bold")
     summary.add_column()
-    summary.add_row("Racer", f"{view.racer} · rank {entry.rank} of {view.board.participants} on "
+    _row(summary, "Racer", f"{view.racer} · rank {entry.rank} of {view.board.participants} on "
                     f"{view.board.board_id}")
-    summary.add_row("Result", f"{_time_label(entry)} · gap {gap(entry.gap_ms)}")
+    _row(summary, "Result", f"{_time_label(entry)} · gap {gap(entry.gap_ms)}")
     if record is None:
-        summary.add_row("Model", f"{entry.model_name}: how it was built is {PRIVATE_DESIGN}")
+        _row(summary, "Model", f"{entry.model_name}: how it was built is {PRIVATE_DESIGN}")
         return Group(summary)
-    summary.add_row("Model", f"{record.model_name} ({record.source_layout.value} files)")
+    _row(summary, "Model", f"{record.model_name} ({record.source_layout.value} files)")
     design = record.design
-    summary.add_row("Algorithm", algorithm_name(design.algorithm))
-    summary.add_row("Network", design.neural_network or DASH)
-    summary.add_row("Sensors", ", ".join(design.sensors) or DASH)
+    _row(summary, "Algorithm", algorithm_name(design.algorithm))
+    _row(summary, "Network", design.neural_network or DASH)
+    _row(summary, "Sensors", ", ".join(design.sensors) or DASH)
     if record.training:
         t = record.training
-        summary.add_row("Training", f"{t.episodes} episodes on {t.track or DASH}, "
+        _row(summary, "Training", f"{t.episodes} episodes on {t.track or DASH}, "
                         f"{duration(int(t.training_time_s))}, best reward {t.best_reward}, "
                         f"{t.completed_laps} laps completed")
     if entry.flags:
-        summary.add_row(f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
+        _row(summary, f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
     return Group(summary, hyperparameter_table(record), action_space_table(record),
                  laps_table(record))
 
 
 def comparison_table(comparison: Comparison) -> Table:
     """The racers' designs side by side; the facts they differ on in bold, marked ≠."""
-    table = Table(title=f"{' vs '.join(c.racer for c in comparison.racers)} on "
-                        f"{comparison.board.board_id}", header_style="bold")
+    table = Table(title=Text(f"{' vs '.join(c.racer for c in comparison.racers)} on "
+                             f"{comparison.board.board_id}"), header_style="bold")
     table.add_column("")
     table.add_column("Fact")
     for compared in comparison.racers:
-        table.add_column(f"{compared.racer} (#{compared.entry.rank}, {_time_label(compared.entry)})")
+        table.add_column(Text(f"{compared.racer} (#{compared.entry.rank}, "
+                              f"{_time_label(compared.entry)})"))
     for fact, label in LABELS.items():
         differs = fact in comparison.differences
         values = [fact_text(fact, getattr(c.facts, fact)) for c in comparison.racers]
-        table.add_row("≠" if differs else "", label, *values, style="bold" if differs else None)
+        _row(table, "≠" if differs else "", label, *values, style="bold" if differs else None)
     return table
 
 
 def insights_table(insights: Insights) -> Table:
     """What the top models share against the field, one fact a row."""
-    table = Table(title=f"The top {insights.top} of {insights.board.board_id} against its "
-                        f"{insights.field} entries", header_style="bold")
+    table = Table(title=Text(f"The top {insights.top} of {insights.board.board_id} against its "
+                             f"{insights.field} entries"), header_style="bold")
     table.add_column("Fact")
     table.add_column(f"Top {insights.top}", justify="right")
     table.add_column("Field", justify="right")
     for fact in insights.facts:
-        table.add_row(fact.label, fact.top + _share(fact.top_share),
-                      fact.field + _share(fact.field_share))
+        _row(table, fact.label, fact.top + _share(fact.top_share),
+             fact.field + _share(fact.field_share))
     return table
 
 
@@ -508,44 +597,44 @@ def _share(share: float | None) -> str:
 
 
 def hyperparameter_table(record: Record) -> Table:
-    table = Table(title="Hyperparameters", header_style="bold")
+    table = Table(title=Text("Hyperparameters"), header_style="bold")
     table.add_column("Name")
     table.add_column("Value", justify="right")
     values = record.design.hyperparameters.model_dump(exclude={"other"}, exclude_none=True)
     values |= record.design.hyperparameters.other
     for name, value in sorted(values.items()):
-        table.add_row(name, str(value))
+        _row(table, name, str(value))
     return table
 
 
 def action_space_table(record: Record) -> Table:
     space = record.design.action_space
     if space.type == "continuous" and space.speed and space.steering_angle:
-        table = Table(title="Action space (continuous)", header_style="bold")
+        table = Table(title=Text("Action space (continuous)"), header_style="bold")
         table.add_column("")
         table.add_column("Low", justify="right")
         table.add_column("High", justify="right")
-        table.add_row("Speed (m/s)", f"{space.speed.low:g}", f"{space.speed.high:g}")
-        table.add_row("Steering (°)", f"{space.steering_angle.low:g}",
+        _row(table, "Speed (m/s)", f"{space.speed.low:g}", f"{space.speed.high:g}")
+        _row(table, "Steering (°)", f"{space.steering_angle.low:g}",
                       f"{space.steering_angle.high:g}")
         return table
-    table = Table(title=f"Action space ({len(space.actions or [])} discrete actions)",
+    table = Table(title=Text(f"Action space ({len(space.actions or [])} discrete actions)"),
                   header_style="bold")
     for name in ("#", "Steering (°)", "Speed (m/s)"):
         table.add_column(name, justify="right")
     for number, action in enumerate(space.actions or []):
         index = action.index if action.index is not None else number
-        table.add_row(str(index), f"{action.steering_angle:g}", f"{action.speed:g}")
+        _row(table, str(index), f"{action.steering_angle:g}", f"{action.speed:g}")
     return table
 
 
 def laps_table(record: Record) -> Table:
-    table = Table(title="Evaluation laps", header_style="bold")
+    table = Table(title=Text("Evaluation laps"), header_style="bold")
     for name in ("Run", "Lap", "Time", "Done", "Status", "Off track", "Crashes"):
         table.add_column(name)
     for run in record.evaluations:
         for lap in run.laps:
-            table.add_row(run.source.rsplit("/", 1)[-1], str(lap.trial), seconds(lap.time_ms),
+            _row(table, run.source.rsplit("/", 1)[-1], str(lap.trial), seconds(lap.time_ms),
                           percent(lap.completion_pct), lap.status, str(lap.off_track),
                           str(lap.crashes))
     return table

@@ -27,12 +27,12 @@ from pathlib import Path
 
 from drboard_assembler import AssemblyError, Overrides, Record, assemble, evaluation_files, planned_trials
 from drboard_functions import errors as domain
-from drboard_functions.models.views import PushReceipt
+from drboard_functions.models.views import PushAccepted, PushReceipt
 from rich.console import Console
 from rich.status import Status
 from rich.text import Text
 
-from . import render
+from . import render, terminal
 from .target import BoardClient
 
 DEFAULT_INTERVAL_S = 10.0
@@ -122,7 +122,7 @@ class Watcher:
         self.board = board
         self.overrides = overrides
         self.board_id = board_id
-        self.console = console or Console(highlight=False)
+        self.console = console or terminal.console()
         self.interval_s = interval_s
         self.settle_s = settle_s
         self.sleep = sleep or time.sleep
@@ -248,7 +248,7 @@ class Watcher:
         self.summary.last_racer = record.racer
         self.console.print(Text(f"{name}: ") + render.receipt_line(receipt), soft_wrap=True)
 
-    def _push_until_answered(self, name: str, record: Record) -> PushReceipt:
+    def _push_until_answered(self, name: str, record: Record) -> PushReceipt | PushAccepted:
         """Push; wait out the board's cooldown and retry an unreachable board with backoff."""
         delay = FIRST_RETRY_S
         while True:

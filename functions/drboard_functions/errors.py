@@ -117,5 +117,11 @@ class StoreUnavailable(StoreError):
     """The storage (or the archive) did not answer in time or could not be reached (HTTP 503)."""
 
 
+class StoreFailed(StoreError):
+    """The storage refused the request for a reason retrying will not mend: a request it found
+    invalid, access the function was not given, a table or bucket that is missing (HTTP 500,
+    with the store's own error named). Nothing was written."""
+
+
 class BoardUnreachable(DomainError):
     """The board could not be reached or answered with something unexpected."""

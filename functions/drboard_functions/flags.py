@@ -21,6 +21,11 @@ DESCRIPTIONS: dict[str, str] = {
     "params-name-another-file": "the run folder's evaluation parameters name a metrics file it "
                                 "does not hold",
     "faster-than-top-speed": "a lap is faster than the track's length at the model's top speed",
+    # For the organiser, set by the board's copy and rule checks; they never move a run.
+    "copied-run": "the same laps as another racer's run (the organiser decides whose it is)",
+    "near-copy": "laps within a few milliseconds of another racer's run",
+    "lookalike": "an alias that could pass for another racer's on the board",
+    "rule-changed": "a run stored before a rule was tightened: today's checks would refuse it",
 }
 
 #: How far a lap's time may stray from its end minus its start (the simulator rounds both).

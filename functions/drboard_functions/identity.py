@@ -55,11 +55,22 @@ def caller_from_event(event: dict[str, Any]) -> Caller | None:
 def _from_jwt_claims(claims: dict[str, Any]) -> Caller | None:
     if claims.get("token_use") != "access" or not claims.get("sub"):
         return None  # an ID token, or no subject: not a sign-in this board accepts
-    groups = claims.get("cognito:groups") or ""
-    if isinstance(groups, str):  # API Gateway passes a list claim as "[a b]"
-        groups = groups.strip("[]").replace(",", " ").split()
     return Caller(principal=f"cognito:{claims['sub']}", name=str(claims.get("username") or ""),
-                  organiser=ORGANISERS_GROUP in groups)
+                  organiser=ORGANISERS_GROUP in cognito_groups(claims.get("cognito:groups")))
+
+
+def cognito_groups(claim: Any) -> list[str]:
+    """The groups of a ``cognito:groups`` claim: a JSON list as Cognito writes it, or the string
+    API Gateway's JWT authorizer makes of a list claim, ``"[organisers other]"`` (its items
+    apart by spaces; a group's name may hold a comma, never a space)."""
+    if isinstance(claim, list):
+        return [str(group) for group in claim]
+    if not isinstance(claim, str):
+        return []
+    text = claim.strip()
+    if text.startswith("[") and text.endswith("]"):
+        text = text[1:-1]
+    return text.split()
 
 
 class SignIn(BaseModel):

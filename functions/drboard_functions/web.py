@@ -266,7 +266,7 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
     if record is None:
         return _render("racer.html", title=title, heading=view.racer,
                        subtitle=f"{standing} · {entry.model_name}", **context)
-    run = record.best_run
+    run = view.scored_run or record.best_run
     context["laps_chart"] = charts.bars(
         f"Lap times of {view.racer}'s best run",
         f"{len(run.laps)} laps of {run.source}; dim bars did not finish (their completion is shown).",

@@ -16,7 +16,15 @@ from botocore.exceptions import EndpointConnectionError
 from click.testing import CliRunner
 from drboard_cli.commands import organisers
 from drboard_cli.main import cli
-from drboard_functions.errors import StoreUnavailable, SubmissionLimitReached, TooSoon
+from drboard_functions.errors import (
+    AliasTaken,
+    Banned,
+    CopiedRun,
+    StoreUnavailable,
+    SubmissionLimitReached,
+    TooSoon,
+)
+from drboard_functions.identity import Caller
 from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_item
@@ -390,6 +398,60 @@ def test_a_push_leaves_a_big_board_from_before_the_counters_to_an_explicit_build
         assert store.build_rank_counters(TRACK).done
         LeaderboardService(store).push(make_record("Latecomer", [(8_500, 100)]))
         assert ranks_of(store) == listed_ranks(store)
+
+
+# ---- integrity on the real engine: what moto may let pass -----------------------------------------
+
+
+def local_service(dynamodb_local: DynamoDbLocal, table: str) -> LeaderboardService:
+    return LeaderboardService(DynamoDbStore(table, dynamodb_local.client()))
+
+
+def test_a_push_of_fifty_runs_fits_its_transaction_and_indexes_every_run(
+        dynamodb_local: DynamoDbLocal, local_table: str) -> None:
+    """Each run's fingerprint is claimed in the push's transaction; the runs' index for every
+    board is written once it commits (fifty runs' items would not fit in one)."""
+    service = local_service(dynamodb_local, local_table)
+    runs = [[(9000 + 10 * n, 100), (9100 + 10 * n, 100), (9200 + 10 * n, 100)] for n in range(50)]
+    receipt = service.push(make_record("Ada", runs=runs))
+    assert receipt.status == "created"
+    copy = make_record("Bob", runs=[runs[49]])
+    with pytest.raises(CopiedRun, match="'ada'"):
+        service.push(copy, caller=Caller(principal="cognito:bob"))
+
+
+def test_a_ban_landing_between_a_push_and_its_write_stops_it_on_dynamodb_local(
+        dynamodb_local: DynamoDbLocal, local_table: str) -> None:
+    store = DynamoDbStore(local_table, dynamodb_local.client())
+    organiser = LeaderboardService(store)
+    mallory = Caller(principal="join:mallory")
+    organiser.push(make_record("Mallory", [(9500, 100)]), caller=mallory)
+    write = store.record_submission
+
+    def banned_meanwhile(*args: Any, **kwargs: Any) -> Any:
+        store.record_submission = write  # type: ignore[method-assign]
+        organiser.ban(TRACK, "Mallory", everywhere=False)
+        return write(*args, **kwargs)
+
+    store.record_submission = banned_meanwhile  # type: ignore[method-assign]
+    with pytest.raises(Banned):
+        organiser.push(make_record("Mallory", [(8000, 100)], model="faster"), caller=mallory)
+    assert organiser.board_page(TRACK).entries == []
+
+
+def test_aliases_and_lookalikes_on_dynamodb_local(dynamodb_local: DynamoDbLocal, local_table: str) -> None:
+    service = local_service(dynamodb_local, local_table)
+    ace = Caller(principal="cognito:ace")
+    service.push(make_record("ACE", [(9000, 100)]), caller=ace)
+    with pytest.raises(AliasTaken, match="could pass for"):
+        service.push(make_record("\u0410\u0421\u0415", [(9100, 100)]), caller=Caller(principal="join:x"))
+    assert service.me(Caller(principal="join:x")).alias is None
+    service.assign_alias("Blaze")
+    service.assign_alias("Blaze", "cognito:blaze")
+    assert [(a.alias, a.principal) for a in service.aliases().aliases] == [
+        ("ACE", "cognito:ace"), ("Blaze", "cognito:blaze")]
+    service.release_alias("blaze")
+    assert service.me(Caller(principal="cognito:blaze")).alias is None
 
 
 def test_the_rebuild_ranks_command_builds_a_big_board_a_step_at_a_time(

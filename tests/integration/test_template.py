@@ -100,7 +100,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 20, "the push, /me, /me/alias and the seventeen organiser routes"
+    assert len(signed) == 25, "the push, /me, /me/alias and the twenty-two organiser routes"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()
@@ -201,6 +201,33 @@ def test_the_table_and_the_bucket_outlive_the_stack(sam: dict[str, Any]) -> None
     bucket = sam["Resources"]["ArchiveBucket"]["Properties"]
     assert bucket["VersioningConfiguration"]["Status"] == "Enabled"
     assert all(bucket["PublicAccessBlockConfiguration"].values())
+
+
+def test_the_archive_expires_versions_that_are_no_longer_current(sam: dict[str, Any]) -> None:
+    rules = sam["Resources"]["ArchiveBucket"]["Properties"]["LifecycleConfiguration"]["Rules"]
+    expiring = [rule for rule in rules if rule["Status"] == "Enabled"
+                and "NoncurrentVersionExpiration" in rule]
+    assert expiring and expiring[0]["NoncurrentVersionExpiration"]["NoncurrentDays"] == {
+        "Ref": "ArchiveOldVersionDays"}
+    assert sam["Parameters"]["ArchiveOldVersionDays"]["Default"] == 30
+
+
+def test_the_api_is_throttled_logged_and_its_functions_reserved(
+        sam: dict[str, Any], cloudformation: dict[str, Any]) -> None:
+    parameters = sam["Parameters"]
+    stage = next(resource["Properties"] for resource in cloudformation["Resources"].values()
+                 if resource["Type"] == "AWS::ApiGatewayV2::Stage")
+    assert stage["DefaultRouteSettings"] == {"ThrottlingRateLimit": {"Ref": "ApiRateLimit"},
+                                             "ThrottlingBurstLimit": {"Ref": "ApiBurstLimit"}}
+    assert stage["AccessLogSettings"]["DestinationArn"] == {"Fn::GetAtt": ["ApiAccessLog", "Arn"]}
+    assert "$context.status" in stage["AccessLogSettings"]["Format"]
+    assert sam["Resources"]["ApiAccessLog"]["Properties"]["RetentionInDays"] == {"Ref": "AccessLogDays"}
+    for function, parameter in (("PushFunction", "PushConcurrency"), ("PullFunction", "PullConcurrency"),
+                                ("AdminFunction", "AdminConcurrency")):
+        reserved = sam["Resources"][function]["Properties"]["ReservedConcurrentExecutions"]
+        assert reserved["Fn::If"][1] == {"Ref": parameter}
+        assert int(parameters[parameter]["Default"]) > 0
+    assert 0 < int(parameters["ApiRateLimit"]["Default"]) <= int(parameters["ApiBurstLimit"]["Default"])
 
 
 # ---- each handler with only its template environment and its template permissions ------------
@@ -449,11 +476,12 @@ def _stream_records(table: str) -> list[dict[str, Any]]:
 
 def _matches(pattern: Any, value: Any) -> bool:
     """Whether an event matches an EventBridge-style filter pattern (the shapes the template's
-    FilterCriteria use: nested keys, lists of values or of ``{"prefix": ...}``)."""
+    FilterCriteria use: nested keys, lists of values, ``{"prefix": ...}`` or ``{"exists": true}``)."""
     if isinstance(pattern, dict):
         return isinstance(value, dict) and all(name in value and _matches(inner, value[name])
                                                for name, inner in pattern.items())
-    return any(value.startswith(option["prefix"]) if isinstance(option, dict) else value == option
+    return any(option.get("exists") is True if isinstance(option, dict) and "exists" in option
+               else value.startswith(option["prefix"]) if isinstance(option, dict) else value == option
                for option in pattern)
 
 
@@ -480,7 +508,8 @@ def test_notify_announces_the_streams_entry_changes_with_its_template_environmen
         pattern = json.loads(sam["Resources"]["NotifyFunction"]["Properties"]["Events"]["EntryChanges"]
                              ["Properties"]["FilterCriteria"]["Filters"][0]["Pattern"])
         records = [r for r in _stream_records(deployed["BoardTable"]) if _matches(pattern, r)]
-        assert {r["dynamodb"]["Keys"]["sk"]["S"][:2] for r in records} == {"R#"}, "entries only"
+        assert {r["dynamodb"]["Keys"]["board"]["S"] for r in records} == {board}, \
+            "entries only: not the runs' authors (R#<racer> in #RUN#... partitions)"
         assert len(records) == 2, "each push's entry"
         aws.calls.clear()
 

@@ -605,7 +605,7 @@ def test_an_organiser_removes_bans_and_unbans_a_racer_and_the_audit_says_so(
     assert "Took Ada off event" in drboard.ok("board", "remove-entry", "event", "ada")
     assert [e["racer"] for e in drboard.json("pull", "--board", "event")["entries"]] == ["Bob"]
     clock.advance(minutes=1)
-    assert "Banned Bob from event" in drboard.ok("board", "ban", "event", "Bob")
+    assert "Banned Bob from event" in drboard.ok("board", "ban", "event", "Bob", "--only-this-board")
     assert drboard.json("pull", "--board", "event")["entries"] == []
     refused = push_as(drboard, COUNTER_CLOCKWISE[2], racer="Bob")
     assert refused.exit_code == 1 and "'Bob' is banned from 'event'" in refused.stderr

@@ -60,6 +60,11 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("PUT", "/boards/{board}/bans/{racer}"),
         ("DELETE", "/boards/{board}/bans/{racer}"),
         ("GET", "/boards/{board}/audit"),
+        ("POST", "/boards/{board}/recheck"),
+        ("GET", "/aliases"),
+        ("GET", "/aliases/audit"),
+        ("PUT", "/aliases/{racer}"),
+        ("DELETE", "/aliases/{racer}"),
         ("GET", "/me"),
         ("PUT", "/me/alias"),
         ("GET", "/.well-known/drboard.json"),
@@ -78,7 +83,7 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
 def test_every_organiser_route_is_signed_and_lists_its_refusals(document: dict[str, Any]) -> None:
     admin = [(method, path, operation) for path, item in document["paths"].items()
              for method, operation in item.items() if "admin" in operation["tags"]]
-    assert len(admin) == 17
+    assert len(admin) == 22
     for method, path, operation in admin:
         assert operation["security"] == [{"sigv4": []}], (method, path)
         assert {"400", "403"} <= set(operation["responses"]), (method, path)

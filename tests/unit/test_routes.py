@@ -451,7 +451,11 @@ def test_the_board_page_escapes_what_racers_typed(client: Client) -> None:
 
 def test_the_index_lists_the_boards_and_escapes_custom_track_names(client: Client) -> None:
     client.push(make_record("Ada"))
-    client.push(make_record("Bob", track="<b>My track</b>"))
+    # A push names a custom track with letters, digits, _ - . only; a board stored before that
+    # rule keeps its name, and the page escapes it.
+    hostile = Board(board_id="custom.<b>My track</b>", track="<b>My track</b>",
+                    title="<b>My track</b>", created_at=datetime(2026, 3, 1, tzinfo=UTC))
+    client.service.store.create_board(hostile)
     response = client.get("/")
     assert response["statusCode"] == 200
     page = response["body"]

@@ -197,10 +197,10 @@ def test_a_table_that_does_not_answer_in_time_answers_503(
     assert json.loads(answer["body"])["error"] == "StoreUnavailable"
 
 
-def test_an_sdk_error_that_is_no_store_error_is_not_hidden(aws: None) -> None:
+def test_an_sdk_error_that_is_no_busy_store_is_named_not_hidden(aws: None) -> None:
     db = boto3.client("dynamodb", region_name=REGION)
     create_board_table(db, "boards")
-    with pytest.raises(ClientError, match="ResourceNotFoundException"):
+    with pytest.raises(errors.StoreFailed, match="ResourceNotFoundException"):
         DynamoDbStore("no-such-table", client=db).get_board("x")
 
 

@@ -179,13 +179,21 @@ def board_remove_entry(ctx: Context, board_id: str, racer: str) -> None:
 @board_group.command(name="ban")
 @click.argument("board_id", metavar="BOARD")
 @click.argument("racer")
+@click.option("--only-this-board", is_flag=True,
+              help="Ban from BOARD only, not from every board of the event.")
 @pass_context
-def board_ban(ctx: Context, board_id: str, racer: str) -> None:
-    """Refuse RACER's pushes to BOARD and take their entry off it (submissions are kept)."""
+def board_ban(ctx: Context, board_id: str, racer: str, only_this_board: bool) -> None:
+    """Refuse RACER's pushes to every board of the event and take their entry off BOARD.
+
+    The ban binds the racer's alias and the sign-in holding it, whatever alias it pushes as. The
+    event is every board of this deployment (a stack, a `drboard serve`, an embedded board); with
+    --only-this-board, BOARD alone. Their submissions are kept.
+    """
     from .. import render
 
     with edge():
-        out().print(render.moderation_line(ctx.board.ban(board_id, racer), "ban"), soft_wrap=True)
+        out().print(render.moderation_line(
+            ctx.board.ban(board_id, racer, everywhere=not only_this_board), "ban"), soft_wrap=True)
 
 
 @board_group.command(name="unban")
@@ -198,6 +206,33 @@ def board_unban(ctx: Context, board_id: str, racer: str) -> None:
 
     with edge():
         out().print(render.moderation_line(ctx.board.unban(board_id, racer), "unban"), soft_wrap=True)
+
+
+@board_group.command(name="recheck")
+@click.argument("board_ids", metavar="[BOARD]...", nargs=-1)
+@pass_context
+def board_recheck(ctx: Context, board_ids: tuple[str, ...]) -> None:
+    """Check every stored run again: copies, lookalikes and today's rules (every board by default).
+
+    Runs stored before copy detection get their fingerprints; runs another racer pushed first or a
+    few milliseconds apart, aliases that could pass for another racer's and records today's
+    checks would refuse (a tightened rule) are flagged for you, never refused or moved. Run it
+    after upgrading drboard; again, it flags nothing new.
+    """
+    from .. import render
+
+    with edge():
+        for board_id in board_ids or [board.board_id for board in ctx.board.boards()]:
+            checked, flagged = 0, []
+            cursor: str | None = None
+            while True:
+                page = ctx.board.recheck_page(board_id, cursor)
+                checked += page.checked
+                flagged += page.flagged
+                cursor = page.next_cursor
+                if cursor is None:
+                    break
+            out().print(render.recheck_line(board_id, checked, flagged), soft_wrap=True)
 
 
 @click.command()

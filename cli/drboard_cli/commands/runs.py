@@ -62,7 +62,8 @@ def assemble_command(path: Path, track: str | None, custom_track: bool, racer: s
         text = record.model_dump_json(indent=2) + "\n"
         if output:
             output.write_text(text, "utf-8")
-            err().print(f"Saved the record of {record.racer} on {record.track} to {output}")
+            err().print(f"Saved the record of {record.racer} on {record.track} to {output}",
+                        markup=False)
         else:
             click.echo(text, nl=False)
 
@@ -216,4 +217,4 @@ def _print_dry_run(path: Path, record: Record) -> None:
     result = display.seconds(best) if best else f"{display.percent(done)} done"
     out().print(f"{path}: {record.racer} · {record.model_name} · {record.track} · "
                 f"{len(record.evaluations)} evaluation runs · best {result} · not sent (dry run)",
-                soft_wrap=True)
+                soft_wrap=True, markup=False)

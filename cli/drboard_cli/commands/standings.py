@@ -80,7 +80,7 @@ def _emit(page: Any, fmt: str, output: Path | None) -> None:
         elif page.entries:
             out().print(render.board_table(page, out().width))
         else:
-            out().print(f"{page.board.title}: no entries yet.")
+            out().print(f"{page.board.title}: no entries yet.", markup=False)
         return
     text = {"json": render.board_json, "csv": render.board_csv,
             "markdown": render.board_markdown}[fmt](page)
@@ -131,7 +131,7 @@ def compare(ctx: Context, racers: tuple[str, ...], track: str | None, board: str
             raise click.UsageError("give two to four racers")
         comparison = ctx.board.compare(_board_id(track, board), list(racers))
         if fmt == "json":
-            click.echo(comparison.model_dump_json(indent=2))
+            click.echo(render.json_text(comparison.model_dump_json(indent=2)))
         else:
             out().print(render.comparison_table(comparison))
 
@@ -154,7 +154,7 @@ def insights(ctx: Context, track: str | None, board: str | None, top: int, fmt: 
     with edge():
         found = ctx.board.insights(_board_id(track, board), top)
         if fmt == "json":
-            click.echo(found.model_dump_json(indent=2))
+            click.echo(render.json_text(found.model_dump_json(indent=2)))
         else:
             out().print(render.insights_table(found))
 
@@ -201,7 +201,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
         elif items:
             out().print(render.history_table(name, items, out().width))
         else:
-            out().print(f"No submissions by {name} yet.")
+            out().print(f"No submissions by {name} yet.", markup=False)
 
 
 @click.command()
@@ -217,7 +217,7 @@ def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: st
     with edge():
         view = ctx.board.racer(_board_id(track, board), racer)
         if fmt == "json":
-            click.echo(view.model_dump_json(indent=2))
+            click.echo(render.json_text(view.model_dump_json(indent=2)))
         else:
             out().print(render.racer_panel(view))
 
@@ -239,7 +239,7 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
         board_id = _board_id(track, board) if (track or board) else None
         summary = ctx.board.status(name, board_id)
         if fmt == "json":
-            click.echo(summary.model_dump_json(indent=2))
+            click.echo(render.json_text(summary.model_dump_json(indent=2)))
         else:
             out().print(render.status_table(summary, out().width))
 

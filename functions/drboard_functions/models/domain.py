@@ -3,7 +3,7 @@ the audit trail, as the service reasons about them and the stores keep them."""
 
 from datetime import UTC, datetime
 from enum import StrEnum
-from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, TypeVar
 
 from drboard_assembler.record import RaceType
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
@@ -123,6 +123,8 @@ class Board(Model):
     deleted_at: datetime | None = None
     #: Racer keys an organiser banned: their pushes are refused, their entry kept off the board.
     banned: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
+    #: The sign-ins (principals) of banned racers: refused whatever alias they push as.
+    banned_principals: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
     designs: Designs = "public"
 
     def designs_shown(self, now: datetime) -> bool:
@@ -159,11 +161,54 @@ def run_mismatches(track: str, direction: str | None, race_type: RaceType,
 
 class SubmissionLimits(Model):
     """What a store checks atomically with a push: the racer's last submission on the board is
-    at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``."""
+    at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``;
+    and, when given, that the board's settings and the event's bans are still at the versions
+    the push was checked against (else BoardChanged, nothing written)."""
 
     now: datetime
     cooldown_s: int = 0
     max_submissions: int | None = None
+    settings_version: int | None = None
+    bans_version: int | None = None
+
+
+class EventBans(Model):
+    """Bans across every board of the event: the boards one deployment holds (a stack's table,
+    one `drboard serve`, one embedded board file). A banned racer key or sign-in (principal) is
+    refused on every board, under any alias."""
+
+    racers: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
+    principals: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
+
+
+class RunPrint(Model):
+    """What identifies one evaluation run of a submission, for copies and near-copies: its
+    fingerprint, the lane its lap times compare in (track and direction), and the sorted times
+    of its complete laps when it has enough of them to be compared (else None)."""
+
+    fingerprint: str
+    lane: str
+    laps_ms: list[int] | None = None
+
+
+class RunAuthor(Model):
+    """A racer who pushed a run (by fingerprint), and when they first did, anywhere."""
+
+    fingerprint: str
+    racer_key: str
+    first_at: datetime
+    board_id: str
+    submission_id: str
+
+
+class NearRun(Model):
+    """A stored run whose complete laps may be close to another's (see RunPrint)."""
+
+    fingerprint: str
+    racer_key: str
+    board_id: str
+    submission_id: str
+    laps_ms: list[int]
 
 
 class RacerTally(Model):
@@ -224,6 +269,15 @@ class Submission(Model):
     score_key: str
 
 
+Flagged = TypeVar("Flagged", Entry, Submission)
+
+
+def with_flag(item: Flagged, flag: str) -> Flagged:
+    """The entry or submission with one more flag on its score."""
+    score = item.score.model_copy(update={"flags": [*item.score.flags, flag]})
+    return item.model_copy(update={"score": score})
+
+
 class AliasClaim(Model):
     """An alias and the sign-in that holds it: one alias per sign-in, one sign-in per alias."""
 
@@ -234,7 +288,8 @@ class AliasClaim(Model):
 
 
 AuditAction = Literal["push", "create", "update", "close", "delete", "restore", "import",
-                      "remove-entry", "ban", "unban", "webhook-add", "webhook-remove"]
+                      "remove-entry", "ban", "unban", "flag", "alias-reserve", "alias-release",
+                      "alias-assign", "recheck", "webhook-add", "webhook-remove"]
 
 
 class AuditEvent(Model):

@@ -24,6 +24,15 @@ class AliasRequest(Model):
     alias: Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=64)]
 
 
+class AliasAssignment(Model):
+    """An organiser's hand on an alias: give it to a sign-in (``principal``, as `drboard whoami`
+    shows it: ``cognito:<sub>``, ``join:<id>``), or keep it reserved for a racer who has not
+    signed in yet (no principal)."""
+
+    principal: Annotated[str, StringConstraints(min_length=1, max_length=256,
+                                                pattern=r"^[a-z]+:[^\x00-\x1f\x7f]+$")] | None = None
+
+
 class BoardSpec(Model):
     """A named board as an organiser creates it. The track is any of its names (or, with
     ``custom_track``, a track of their own named exactly); ``min_laps`` defaults to the method's."""

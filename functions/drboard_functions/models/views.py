@@ -4,7 +4,7 @@ are the stable JSON the README documents."""
 from datetime import datetime
 from typing import Literal
 
-from drboard_assembler.record import RaceType, Record
+from drboard_assembler.record import EvaluationRun, RaceType, Record
 from pydantic import Field
 
 from .domain import AuditEvent, BoardStatus, Design, Designs, FlaggedRuns, Model, TimingMethod
@@ -32,6 +32,44 @@ class Moderation(Model):
     racer: str
     banned: bool
     entry_removed: bool
+    #: Whether the racer is banned from every board of the event (the deployment), not only this one.
+    everywhere: bool = False
+    #: The sign-in (principal) the ban binds, when the racer's alias is claimed.
+    principal: str | None = None
+
+
+class AliasView(Model):
+    """An alias and who holds it: a sign-in's principal, or ``reserved:<alias>`` while an
+    organiser keeps it for a racer who has not signed in yet."""
+
+    alias: str
+    racer_key: str
+    principal: str
+    reserved: bool
+    claimed_at: datetime
+
+
+class AliasList(Model):
+    aliases: list[AliasView]
+    next_cursor: str | None = None
+
+
+class RecheckPage(Model):
+    """One page of a board's recheck: how many stored submissions it went through and what it
+    flagged for the organiser; pass ``next_cursor`` until it is null."""
+
+    board_id: str
+    checked: int
+    flagged: list["FlaggedRun"]
+    next_cursor: str | None = None
+
+
+class FlaggedRun(Model):
+    board_id: str
+    racer: str
+    submission_id: str
+    flag: str
+    why: str
 
 
 class EntryView(Model):
@@ -103,6 +141,9 @@ class RacerView(Model):
     record: Record | None
     #: Where the racer's history goes on (``cursor``); None when ``history`` is the rest of it.
     next_cursor: str | None = None
+    #: The evaluation run of the record that the entry's score comes from (what the racer page
+    #: charts); None while the board keeps designs private.
+    scored_run: EvaluationRun | None = None
 
 
 class PushReceipt(Model):
@@ -114,6 +155,18 @@ class PushReceipt(Model):
     participants: int
     entry: EntryView
     submission: HistoryItem
+
+
+class PushAccepted(Model):
+    """A push that was stored, whose rank the board could not read back just then (HTTP 202):
+    the racer's standing is at ``receipt`` (``GET``), and pushing the run again answers it."""
+
+    status: Literal["accepted"] = "accepted"
+    board_id: str
+    submission_id: str
+    racer: str
+    receipt: str
+    message: str
 
 
 class RacerStatus(Model):

@@ -59,6 +59,7 @@ from ..errors import (
     RacerNotFound,
     StoreBusy,
     StoreError,
+    StoreFailed,
     StoreUnavailable,
     SubmissionLimitReached,
     SubmissionTooLarge,
@@ -67,6 +68,7 @@ from ..errors import (
     UnsupportedBody,
     WebhookNotFound,
 )
+from ..identity import caller_from_event
 from .params import ADMIN_TAG, SIGV4, RequestBody, bounded_json, route_body
 from .responses import ErrorBody, api_version, page_answer
 
@@ -123,6 +125,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
+    (StoreFailed, HTTPStatus.BAD_GATEWAY),
     (StoreBusy, HTTPStatus.SERVICE_UNAVAILABLE),
     (StoreUnavailable, HTTPStatus.SERVICE_UNAVAILABLE),
     (StoreError, HTTPStatus.SERVICE_UNAVAILABLE),
@@ -234,13 +237,25 @@ def _answer_unprocessable(app: APIGatewayHttpResolver, body: RequestBody, messag
 class BoardResolver(APIGatewayHttpResolver):
     """Powertools' resolver, after a look at the request's framing: a body that cannot be read
     as what its headers say is refused before any route or parser sees it (Powertools would
-    raise on some of them: a multipart type without a boundary, base64 that does not decode)."""
+    raise on some of them: a multipart type without a boundary, base64 that does not decode).
+    An organiser route refuses a caller who does not organise before it validates anything, so
+    a racer learns nothing of its body's fields (403, not 422)."""
 
     def resolve(self, event: Mapping[str, Any], context: LambdaContext) -> dict[str, Any]:
         problem = unreadable(event)
         if problem is not None:
             return refusal(problem)
         return super().resolve(event, context)
+
+    def _call_route(self, route: Any, route_arguments: dict[str, str]) -> Any:
+        if ADMIN_TAG in (route.tags or ()):
+            caller = caller_from_event(self.current_event.raw_event)
+            if caller is None or not caller.organiser:
+                handled = self._call_exception_handler(
+                    NotAuthorized("only the board's organisers may do this"), route)
+                if handled is not None:
+                    return handled
+        return super()._call_route(route, route_arguments)
 
 
 def unreadable(event: Mapping[str, Any]) -> DomainError | None:

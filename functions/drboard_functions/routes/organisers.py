@@ -5,20 +5,29 @@ from __future__ import annotations
 
 import json
 from http import HTTPStatus
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from aws_lambda_powertools.event_handler import Response, content_types
-from aws_lambda_powertools.event_handler.openapi.params import Body
+from aws_lambda_powertools.event_handler.openapi.params import Body, Query
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import limits
 
 from ..errors import InvalidQuery
 from ..models.domain import Board
-from ..models.requests import BoardChanges, BoardSpec, ImportedSubmission
+from ..models.requests import AliasAssignment, BoardChanges, BoardSpec, ImportedSubmission
 from ..models.transfer import ExportPage, ImportReceipt
-from ..models.views import AuditPage, BoardView, Moderation, RankCounters
+from ..models.views import (
+    AliasList,
+    AliasView,
+    AuditPage,
+    BoardView,
+    Moderation,
+    RankCounters,
+    RecheckPage,
+)
 from .params import (
     ADMIN_TAG,
+    ASSIGNMENT_BODY,
     BOARD_BODY,
     CHANGES_BODY,
     DEFAULT_LIMIT,
@@ -30,6 +39,7 @@ from .params import (
     Limit,
     Organiser,
     RacerAlias,
+    ReplaceHolder,
     RequestBody,
     Service,
     admin_router,
@@ -56,6 +66,9 @@ def _admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
     responses |= {status: error_response(text) for status, text in (errors or {}).items()}
     return responses | (also or {})
 
+
+BanScope = Annotated[Literal["event", "board"], Query(
+    description="`event` (default): every board of the deployment; `board`: this board only.")]
 
 _ADMIN: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
 _NO_BOARD = "No such board (or it was deleted)."
@@ -257,21 +270,26 @@ def remove_entry(board: BoardId, racer: RacerAlias, service: Service,
 
 @admin_router.put(
     "/boards/<board>/bans/<racer>",
-    summary="Ban a racer from a board",
-    description="Their pushes are refused (`Banned`) and their entry comes off the board; their "
+    summary="Ban a racer",
+    description="The racer's pushes are refused (`Banned`): by their alias, and by the sign-in "
+                "holding it whatever alias it pushes as; on every board of the event (the "
+                "deployment) unless `scope=board`. Their entry comes off this board; their "
                 "submissions stay, and `DELETE` on the same path puts their best back.",
     responses=_admin_responses(json_response("The racer is banned.", Moderation),
                                errors={404: _NO_BOARD}),
     **_ADMIN,
 )
-def ban_racer(board: BoardId, racer: RacerAlias, service: Service, organiser: Organiser) -> Moderation:
-    return service.ban(segment(board), segment(racer), caller=organiser)
+def ban_racer(board: BoardId, racer: RacerAlias, service: Service, organiser: Organiser,
+              scope: BanScope = "event") -> Moderation:
+    return service.ban(segment(board), segment(racer), caller=organiser,
+                       everywhere=scope == "event")
 
 
 @admin_router.delete(
     "/boards/<board>/bans/<racer>",
     summary="Lift a racer's ban",
-    description="The racer may push again, and their best submission is back on the board.",
+    description="The racer may push again (their bans on this board and across the event are "
+                "lifted), and their best submission is back on the board.",
     responses=_admin_responses(json_response("The racer is no longer banned.", Moderation),
                                errors={404: _NO_BOARD}),
     **_ADMIN,
@@ -293,3 +311,85 @@ def unban_racer(board: BoardId, racer: RacerAlias, service: Service,
 def get_audit(board: BoardId, service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
               cursor: Cursor = None) -> AuditPage:
     return service.audit(segment(board), cursor or None, limit)
+
+
+@admin_router.post(
+    "/boards/<board>/recheck",
+    summary="Recheck a board's stored runs, a page at a time",
+    description="Indexes each stored run for copies and lookalikes (runs stored before the "
+                "index), and flags for the organiser the runs another racer pushed first or a "
+                "few milliseconds apart (`copied-run`, `near-copy`), aliases that could pass "
+                "for another racer's (`lookalike`) and records today's checks would refuse "
+                "(`rule-changed`). Nothing is refused or moved. Pass `next_cursor` as `cursor` "
+                "until it is null; again, it flags nothing new.",
+    responses=_admin_responses(json_response("One page of the recheck.", RecheckPage),
+                               errors={400: "A bad cursor or board id.", 404: _NO_BOARD}),
+    **_ADMIN,
+)
+def recheck_board(board: BoardId, service: Service, organiser: Organiser,
+                  cursor: Cursor = None) -> RecheckPage:
+    return service.recheck_page(segment(board), cursor or None, caller=organiser)
+
+
+# ---- aliases --------------------------------------------------------------------------------
+
+
+@admin_router.get(
+    "/aliases",
+    summary="The aliases held and reserved",
+    description="Each alias with the sign-in (principal) holding it, or `reserved:<alias>` "
+                "while an organiser keeps it for its racer; `limit` at a time, by alias.",
+    responses=_admin_responses(json_response("One page of aliases.", AliasList),
+                               errors={400: "A bad limit or cursor."}),
+    **_ADMIN,
+)
+def list_aliases(service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
+                 cursor: Cursor = None) -> AliasList:
+    return service.aliases(limit, cursor or None)
+
+
+@admin_router.get(
+    "/aliases/audit",
+    summary="The aliases' audit trail",
+    description="Every reservation, assignment and release of an alias: who, when, what.",
+    responses=_admin_responses(json_response("One page of the trail.", AuditPage),
+                               errors={400: "A bad limit or cursor."}),
+    **_ADMIN,
+)
+def alias_audit(service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
+                cursor: Cursor = None) -> AuditPage:
+    return service.alias_audit(cursor or None, limit)
+
+
+@admin_router.put(
+    "/aliases/<racer>",
+    summary="Reserve an alias, or give it to a sign-in",
+    description="With no `principal`, the alias is kept for its racer: no one claims it until "
+                "an organiser gives it out (an alias someone holds stays theirs). With a "
+                "`principal` (a sign-in, as `GET /me` names it), the alias is that sign-in's; "
+                "one another sign-in holds moves only with `replace=true`. Again changes nothing.",
+    responses=_admin_responses(
+        json_response("Who holds the alias now.", AliasView), body=ASSIGNMENT_BODY, errors={
+            400: "The alias is not one a racer may take, or the principal is not a sign-in.",
+            403: "Another sign-in holds the alias (`AliasTaken`): give `replace=true`. "
+                 "Or the caller does not organise."}),
+    **_ADMIN,
+)
+@takes(ASSIGNMENT_BODY)
+def assign_alias(racer: RacerAlias,
+                 assignment: Annotated[AliasAssignment, Body(description="Who gets the alias.")],
+                 service: Service, organiser: Organiser, replace: ReplaceHolder = False) -> AliasView:
+    return service.assign_alias(segment(racer), assignment.principal, replace, caller=organiser)
+
+
+@admin_router.delete(
+    "/aliases/<racer>",
+    summary="Release an alias",
+    description="The alias leaves its sign-in (or its reservation): the next racer to claim it "
+                "takes it, unless it has results, which only an organiser gives out.",
+    responses=_admin_responses(json_response("The claim that was released.", AliasView),
+                               errors={404: "No one holds the alias."}),
+    **_ADMIN,
+)
+def release_alias(racer: RacerAlias, service: Service, organiser: Organiser) -> AliasView:
+    return service.release_alias(segment(racer), caller=organiser)

@@ -71,6 +71,7 @@ Screen = Annotated[bool, Query(description="The big-screen mode: sized for a roo
                                            "a QR code of the page, auto-scrolling.")]
 IfNoneMatch = Annotated[str | None, Header(max_length=1024, description="The `ETag` of the copy "
                                           "the client holds.")]
+ReplaceHolder = Annotated[bool, Query(description="Move the alias from the sign-in that holds it.")]
 OnBoard = Annotated[str | None, Query(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
                                       description="Only this board (default: every board).")]
 
@@ -140,6 +141,7 @@ IMPORT_BODY = RequestBody("submission", limits.MAX_RECORD_BYTES + IMPORT_HEADROO
 BOARD_BODY = RequestBody("board", MAX_BOARD_BODY_BYTES, InvalidQuery)
 CHANGES_BODY = RequestBody("changes", MAX_BOARD_BODY_BYTES, InvalidQuery)
 ALIAS_BODY = RequestBody("alias", limits.KIB, InvalidQuery)
+ASSIGNMENT_BODY = RequestBody("assignment", limits.KIB, InvalidQuery)
 
 _BODIES: dict[Callable[..., Any], RequestBody] = {}
 F = TypeVar("F", bound=Callable[..., Any])
@@ -164,10 +166,16 @@ def bounded_json(body: str, bound: RequestBody = RECORD_BODY) -> Any:
         raise SubmissionTooLarge(
             f"the request body is over {bound.max_bytes} bytes, the bound of {bound.what}")
     try:
-        return json.loads(body)
+        parsed = json.loads(body)
     except json.JSONDecodeError:
         raise  # Powertools answers it as a body that is not JSON, with where parsing stopped
     except (ValueError, RecursionError) as error:  # a number over 4,300 digits; too deep a nesting
         reason = "nested too deeply" if isinstance(error, RecursionError) else str(error).split(":")[0]
         raise bound.invalid(f"{bound.what} cannot be read: {reason}",
                             detail=[{"loc": bound.name, "msg": reason, "type": "value_error"}]) from None
+    if not isinstance(parsed, dict):  # an array holding a record is not a record
+        kind = type(parsed).__name__.replace("list", "an array").replace("dict", "an object")
+        reason = f"the body must be a JSON object, not {kind}"
+        raise bound.invalid(f"{bound.what} is not a JSON object",
+                            detail=[{"loc": bound.name, "msg": reason, "type": "model_type"}])
+    return parsed

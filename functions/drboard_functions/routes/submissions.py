@@ -11,7 +11,7 @@ from drboard_assembler import limits
 from drboard_assembler.record import Record
 
 from ..models.requests import AliasRequest
-from ..models.views import Me, PushReceipt
+from ..models.views import Me, PushAccepted, PushReceipt
 from .params import ALIAS_BODY, RECORD_BODY, SIGV4, BoardId, Service, SignedIn, push_router, segment, takes
 from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_answer, json_response
 
@@ -30,15 +30,20 @@ from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_answ
     responses={
         201: json_response("The submission was stored.", PushReceipt),
         200: json_response("The same run was already submitted; nothing changed.", PushReceipt),
+        202: json_response("The submission was stored, but its rank could not be read back "
+                           "just then: read it at `receipt` (pushing the run again answers "
+                           "it as a duplicate).", PushAccepted),
         400: error_response(BAD_PATH + UNREADABLE),
         401: error_response("No sign-in the board accepts (`NotSignedIn`)."),
         403: error_response("The board is not open (`BoardClosed`: it opens later or has "
                              "closed), the racer has made every submission it allows "
-                             "(`SubmissionLimitReached`), the alias is another racer's or the "
-                             "caller pushes as another alias (`AliasTaken`), or the racer is "
-                             "banned from the board (`Banned`). " + UNSIGNED),
-        409: error_response("The run's evaluation is already on the board under another "
-                             "racer (`CopiedRun`)."),
+                             "(`SubmissionLimitReached`), the alias is another racer's, kept "
+                             "by the organiser, has results pushed without a sign-in, could "
+                             "pass for another racer's on the board, or the caller pushes as "
+                             "another alias (`AliasTaken`), or the racer or their sign-in is "
+                             "banned (`Banned`). " + UNSIGNED),
+        409: error_response("The run's laps were first pushed by another racer, on this or "
+                             "any board (`CopiedRun`)."),
         404: error_response("No such board, and the run's own board is another one."),
         413: error_response(f"The body is over {limits.MAX_RECORD_BYTES} bytes."),
         415: error_response("The body is not JSON (`UnsupportedBody` for a multipart one)."),
@@ -54,8 +59,10 @@ def submit(
     record: Annotated[Record, Body(description="The record `drboard assemble` builds.")],
     service: Service,
     caller: SignedIn,
-) -> Response[PushReceipt]:
+) -> Response[PushReceipt | PushAccepted]:
     receipt = service.push(record, segment(board), caller=caller)
+    if isinstance(receipt, PushAccepted):
+        return json_answer(HTTPStatus.ACCEPTED, receipt)
     return json_answer(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
 
 

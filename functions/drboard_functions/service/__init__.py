@@ -5,8 +5,9 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
-trail's reading), ``transfer`` (export and import), ``results`` (laps to analyse),
-``sharing`` (result cards) and ``webhooks`` (the chat's announcements).
+trail's reading), ``transfer`` (export, import and a board's recheck), ``aliases`` (the
+organisers' hand on racers' aliases), ``results`` (laps to analyse), ``sharing`` (result cards)
+and ``webhooks`` (the chat's announcements); ``copies`` holds the rules of copied runs.
 :class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
@@ -17,6 +18,7 @@ from typing import Any, Concatenate, ParamSpec, TypeVar
 
 from ..models.notices import EntryChange
 from ..stores.base import BoardStore, RecordArchive
+from .aliases import Aliases
 from .boards import (
     CUSTOM_PREFIX,
     BoardKeeper,
@@ -27,10 +29,11 @@ from .boards import (
     racer_key,
     utc_now,
 )
+from .copies import evaluation_fingerprints
 from .managing import Managing
 from .moderating import Moderating
 from .paging import DEFAULT_PAGE
-from .pushing import Pushing, check_record_size, evaluation_fingerprints, scored_write
+from .pushing import Pushing, check_record_size, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
 from .results import LAPS_PAGE, Results
 from .sharing import Sharing
@@ -74,6 +77,7 @@ class LeaderboardService:
         self._managing = Managing(keeper)
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
+        self._aliases = Aliases(keeper)
         self._results = Results(keeper)
         self._webhooks = Webhooks(keeper)
         self._sharing = Sharing(self._reading)
@@ -109,6 +113,12 @@ class LeaderboardService:
     export_page = _handed_to("_transfer", Transfer.export_page)
     import_board = _handed_to("_transfer", Transfer.import_board)
     import_submission = _handed_to("_transfer", Transfer.import_submission)
+    recheck_page = _handed_to("_transfer", Transfer.recheck_page)
+
+    assign_alias = _handed_to("_aliases", Aliases.assign_alias)
+    release_alias = _handed_to("_aliases", Aliases.release_alias)
+    aliases = _handed_to("_aliases", Aliases.aliases)
+    alias_audit = _handed_to("_aliases", Aliases.alias_audit)
 
     laps_page = _handed_to("_results", Results.laps_page)
     run_laps = _handed_to("_results", Results.run_laps)

@@ -1,15 +1,24 @@
-"""Pushing a run, with the trust rules that go with it: who may push as whom (aliases), copied
-runs, and the board's window and submission limits."""
+"""Pushing a run, with the trust rules that go with it: who may push as whom (aliases and their
+lookalikes), bans, copied runs, and the board's window and submission limits.
+
+The order of a push: the cheap checks first (the board, bans, a duplicate, the window, the
+racer's cooldown and maximum, a copied run), then the archive (a conditional put: a retry adds
+no version), then one write that stores the submission and claims what the push claims — the
+alias, its skeleton on the board, its runs' fingerprints — on condition that the board's
+settings and the event's bans are still those the push was checked against; when they changed
+meanwhile, the push is checked again. Once that write has committed, the answer is a success:
+a receipt, or 202 with where to read it when the board cannot say the rank just then.
+"""
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from datetime import datetime, timedelta
+from urllib.parse import quote
 
+from drboard_assembler.aliases import confusable_skeleton
 from drboard_assembler.limits import MAX_RECORD_BYTES
-from drboard_assembler.record import Alias, EvaluationRun, Record
+from drboard_assembler.record import Alias, Record
 from pydantic import TypeAdapter, ValidationError
 
 from .. import display, ranking
@@ -21,19 +30,42 @@ from ..errors import (
     InvalidQuery,
     NotAuthorized,
     NotSignedIn,
+    StoreBusy,
+    StoreError,
     SubmissionLimitReached,
     SubmissionTooLarge,
     TooSoon,
 )
 from ..identity import LOCAL_ORGANISER, Caller
-from ..models.domain import AliasClaim, Board, Entry, RacerTally, Submission, SubmissionLimits
+from ..models.domain import (
+    AliasClaim,
+    Board,
+    Entry,
+    EventBans,
+    RacerTally,
+    Submission,
+    SubmissionLimits,
+    with_flag,
+)
 from ..models.notices import EntryChange
-from ..models.views import Me, PushReceipt
-from ..stores.base import AliasConflict, FingerprintTaken, LimitReached, RecordArchive
+from ..models.views import Me, PushAccepted, PushReceipt
+from ..stores.base import (
+    AliasConflict,
+    BoardChanged,
+    FingerprintTaken,
+    LimitReached,
+    LookalikeTaken,
+    RecordArchive,
+)
 from ..views import design_of, entry_view, history_item
 from .boards import BoardKeeper, check_open, racer_key
+from .copies import Verdict, judge, run_prints
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
+#: How many times a push is checked again when the board's settings change under it.
+SETTINGS_ATTEMPTS = 5
+#: The principal of an alias an organiser keeps for a racer who has not signed in yet.
+RESERVED = "reserved:"
 
 
 class Pushing:
@@ -43,45 +75,114 @@ class Pushing:
         self.archive = archive
 
     def push(self, record: Record, board_id: str | None = None,
-             caller: Caller | None = LOCAL_ORGANISER) -> PushReceipt:
+             caller: Caller | None = LOCAL_ORGANISER) -> PushReceipt | PushAccepted:
         """Store a run on its board. A run already on the board is a duplicate: it changes
         nothing and is answered whatever the board's window and limits (it never counts).
         ``caller`` is who pushes: a racer may push only as the alias their sign-in holds (their
-        first push claims it); organisers push as anyone; None (unsigned) is refused."""
+        first stored push claims it); organisers push as anyone; None (unsigned) is refused."""
         check_record_size(record)
+        if caller is None:
+            raise NotSignedIn("sign in to push: `drboard login` for a deployed board, "
+                              "`drboard join CODE` for a `drboard serve` board")
         now = self.keeper.clock()
-        self._check_pusher(caller, record.racer, now)
-        board = self.keeper.for_record(record, board_id, now).board
+        claim = self._new_claim(caller, record.racer, now)
+        board_id = self.keeper.for_record(record, board_id, now).board.board_id
         key = racer_key(record.racer)
-        if key in board.banned:
-            raise Banned(f"{record.racer!r} is banned from {board.board_id!r} by its organisers")
-        stored = self.store.get_submission(board.board_id, key, record.submission_id)
-        if stored is not None:
-            return self._duplicate_receipt(stored, record.racer)
-        check_open(board, now)
-        submission, entry = scored_write(record, board, now)
-        limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
-                                  max_submissions=board.max_submissions)
-        audit = self.keeper.event(board.board_id, "push", caller, now, racer=record.racer,
-                                  submission_id=record.submission_id, detail=record.model_name)
-        keep_in_archive(self.archive, board.board_id, record)
-        before = self.store.get_entry(board.board_id, key) if self.keeper.listener else None
-        try:
-            outcome = self.store.record_submission(submission, record, entry, limits,
-                                                   fingerprints=evaluation_fingerprints(record),
-                                                   audit=audit)
-        except LimitReached as refused:
-            raise _limit_error(board, record.racer, refused.tally, now) from None
-        except FingerprintTaken as copy:
-            raise CopiedRun(f"this run's evaluation is already on {board.board_id!r} under "
-                            f"another racer ({copy.racer_key}): a copied run is refused") from None
+        prints = run_prints(record)
+        skeleton = confusable_skeleton(record.racer)
+        archived = False
+        for _ in range(SETTINGS_ATTEMPTS):
+            stored_board = self.keeper.require(board_id)
+            board = stored_board.board
+            bans, bans_version = self.store.event_bans()
+            check_not_banned(board, bans, record.racer, caller)
+            stored = self.store.get_submission(board_id, key, record.submission_id)
+            if stored is not None:
+                return self._duplicate_receipt(stored, record.racer)
+            check_open(board, now)
+            self._check_limits(board, key, record.racer, now)
+            verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
+            submission, entry = scored_write(record, board, now, verdict.flags)
+            if not archived:
+                keep_in_archive(self.archive, board_id, record)
+                archived = True
+            for fingerprint in verdict.take_over:
+                self.store.hand_over_fingerprint(board_id, fingerprint, key)
+            limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
+                                      max_submissions=board.max_submissions,
+                                      settings_version=stored_board.settings_version,
+                                      bans_version=bans_version)
+            audit = self.keeper.event(board_id, "push", caller, now, racer=record.racer,
+                                      submission_id=record.submission_id, detail=record.model_name)
+            before = self.store.get_entry(board_id, key) if self.keeper.listener else None
+            try:
+                outcome = self.store.record_submission(
+                    submission, record, entry, limits, fingerprints=[p.fingerprint for p in prints],
+                    audit=audit, runs=prints, claim=claim, skeleton=skeleton)
+            except BoardChanged:
+                continue  # a ban, a window or a limit changed meanwhile: check again
+            except LimitReached as refused:
+                raise _limit_error(board, record.racer, refused.tally, now) from None
+            except FingerprintTaken as copy:
+                raise CopiedRun(f"this run's evaluation is already on {board_id!r} under "
+                                f"another racer ({copy.racer_key}): a copied run is refused") from None
+            except LookalikeTaken as lookalike:
+                raise AliasTaken(f"the alias {record.racer!r} could pass for "
+                                 f"{lookalike.racer_key!r}, another racer on {board_id!r}: "
+                                 "choose an alias that does not look like theirs") from None
+            except AliasConflict as conflict:
+                raise _alias_taken(conflict.holder, caller, record.racer) from None
+            break
+        else:
+            raise StoreBusy(f"the settings of {board_id!r} kept changing while the push was "
+                            "checked; nothing was stored, try again")
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
-            stored = self.store.get_submission(board.board_id, key, record.submission_id)
+            stored = self.store.get_submission(board_id, key, record.submission_id)
             return self._duplicate_receipt(stored or submission, record.racer)
         if outcome.improved and self.keeper.listener is not None:
-            self.keeper.listener(EntryChange(board_id=board.board_id, before=before,
+            self.keeper.listener(EntryChange(board_id=board_id, before=before,
                                              after=outcome.entry, at=now))
-        return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
+        self._tell_organiser(board_id, record, verdict, caller, now)
+        try:
+            return self._receipt(submission, outcome.entry, outcome.duplicate, outcome.improved)
+        except StoreError:  # stored: only the rank could not be read back just now
+            return PushAccepted(
+                board_id=board_id, submission_id=record.submission_id, racer=record.racer,
+                receipt=f"/boards/{quote(board_id, safe='')}/racers/{quote(record.racer, safe='')}",
+                message="stored; the board could not read its rank back just now "
+                        "(`drboard status` shows it, and pushing the run again answers it)")
+
+    def _check_limits(self, board: Board, key: str, racer: str, now: datetime) -> None:
+        """The racer's cooldown and maximum, before the archive is written (the write checks
+        them again, atomically)."""
+        if not board.cooldown_s and board.max_submissions is None:
+            return
+        tally = self.store.tally(board.board_id, key)
+        cap = board.max_submissions
+        last = tally.last_submitted_at
+        if (cap is not None and tally.submissions >= cap) or (
+                board.cooldown_s and last is not None
+                and (now - last).total_seconds() < board.cooldown_s):
+            raise _limit_error(board, racer, tally, now)
+
+    def _tell_organiser(self, board_id: str, record: Record, verdict: Verdict,
+                        caller: Caller, now: datetime) -> None:
+        """Flag what the organiser should look at: this run, and the other racers' runs it
+        copies or was copied from. The push has committed: a failure here is not the racer's
+        (the next `drboard board recheck` flags the same)."""
+        try:
+            for note in verdict.notes:
+                self.keeper.audit(board_id, "flag", caller, racer=record.racer,
+                                  submission_id=record.submission_id, detail=note)
+            for author, flag in verdict.others:
+                if self.store.flag_submission(author.board_id, author.racer_key,
+                                              author.submission_id, flag):
+                    self.keeper.audit(author.board_id, "flag", caller, racer=author.racer_key,
+                                      submission_id=author.submission_id,
+                                      detail=f"{flag}: the same laps as {record.racer!r}'s on "
+                                             f"{board_id!r}")
+        except StoreError:
+            pass
 
     def _duplicate_receipt(self, stored: Submission, racer: str) -> PushReceipt:
         best = self.store.get_entry(stored.board_id, stored.racer_key)
@@ -107,27 +208,29 @@ class Pushing:
 
     # ---- who is pushing -------------------------------------------------------------------
 
-    def _check_pusher(self, caller: Caller | None, racer: str, now: datetime) -> None:
-        if caller is None:
-            raise NotSignedIn("sign in to push: `drboard login` for a deployed board, "
-                              "`drboard join CODE` for a `drboard serve` board")
+    def _new_claim(self, caller: Caller, alias: str, now: datetime) -> AliasClaim | None:
+        """The claim a racer's push (or `PUT /me/alias`) would make, if any: None when the
+        caller already holds the alias (or organises). Refused (AliasTaken) when the caller
+        holds another alias, another sign-in holds it or an organiser keeps it, or the alias
+        already has results on the board with no sign-in of its own (pushed by an organiser,
+        imported, or pushed before sign-ins): only an organiser can give that one out."""
         if caller.organiser:
-            return
-        claim = self.store.alias_of(caller.principal) or self._claim(caller, racer, now)
-        if claim.racer_key != racer_key(racer):
-            raise AliasTaken(f"you push as {claim.alias!r}: this run is {racer!r}'s "
-                             "(give `--racer` your own alias)")
-
-    def _claim(self, caller: Caller, alias: str, now: datetime) -> AliasClaim:
-        claim = AliasClaim(racer_key=racer_key(alias), alias=alias, principal=caller.principal,
-                           claimed_at=now)
-        try:
-            return self.store.claim_alias(claim)
-        except AliasConflict as conflict:
-            if conflict.holder.principal == caller.principal:
-                raise AliasTaken(f"you push as {conflict.holder.alias!r}, not {alias!r}: "
-                                 "an alias is claimed once") from None
-            raise AliasTaken(f"the alias {alias!r} belongs to another racer") from None
+            return None
+        key = racer_key(alias)
+        held = self.store.alias_of(caller.principal)
+        if held is not None:
+            if held.racer_key != key:
+                raise AliasTaken(f"you push as {held.alias!r}, not {alias!r}: an alias is claimed "
+                                 "once (give `--racer` your own alias)")
+            return None
+        holder = self.store.alias_holder(key)
+        if holder is not None:
+            raise _alias_taken(holder, caller, alias)
+        if self.store.history_page(key, None, None, 1).submissions:
+            raise AliasTaken(f"the alias {alias!r} already has results on this board, pushed "
+                             "without a sign-in: only an organiser can give it to you "
+                             "(`drboard aliases assign`)")
+        return AliasClaim(racer_key=key, alias=alias, principal=caller.principal, claimed_at=now)
 
     def me(self, caller: Caller | None = LOCAL_ORGANISER) -> Me:
         if caller is None:
@@ -140,33 +243,56 @@ class Pushing:
         """Claim the alias the caller will push as (once: an alias is not renamed)."""
         if caller is None:
             raise NotSignedIn("sign in to claim an alias: `drboard login` or `drboard join CODE`")
-        try:
-            alias = _ALIAS.validate_python(alias)
-        except ValidationError as error:
-            message = error.errors()[0]["msg"].removeprefix("Value error, ")
-            raise InvalidQuery(message, detail=[{"loc": "alias", "msg": message,
-                                                 "type": "value_error"}]) from None
-        self._claim(caller, alias, self.keeper.clock())
+        alias = valid_alias(alias)
+        now = self.keeper.clock()
+        claim = (AliasClaim(racer_key=racer_key(alias), alias=alias, principal=caller.principal,
+                            claimed_at=now) if caller.organiser
+                 else self._new_claim(caller, alias, now))
+        if claim is not None:
+            try:
+                self.store.claim_alias(claim)
+            except AliasConflict as conflict:
+                raise _alias_taken(conflict.holder, caller, alias) from None
         return self.me(caller)
+
+
+def valid_alias(alias: str) -> str:
+    """The alias, if a racer may take it (InvalidQuery saying why not)."""
+    try:
+        return _ALIAS.validate_python(alias)
+    except ValidationError as error:
+        message = error.errors()[0]["msg"].removeprefix("Value error, ")
+        raise InvalidQuery(message, detail=[{"loc": "alias", "msg": message,
+                                             "type": "value_error"}]) from None
+
+
+def _alias_taken(holder: AliasClaim, caller: Caller, alias: str) -> AliasTaken:
+    if holder.principal == caller.principal:
+        return AliasTaken(f"you push as {holder.alias!r}, not {alias!r}: an alias is claimed once")
+    if holder.principal.startswith(RESERVED):
+        return AliasTaken(f"the alias {alias!r} is kept by the board's organiser for its racer: "
+                          "ask them to give it to your sign-in")
+    return AliasTaken(f"the alias {alias!r} belongs to another racer")
+
+
+def check_not_banned(board: Board, bans: EventBans, racer: str, caller: Caller) -> None:
+    """Refuse a banned racer: by their alias, or by their sign-in whatever alias they push as,
+    on the board or on every board of the event."""
+    key = racer_key(racer)
+    person = None if caller.organiser else caller.principal
+    if key in board.banned or person in board.banned_principals:
+        raise Banned(f"{racer!r} is banned from {board.board_id!r} by its organisers")
+    if key in bans.racers or person in bans.principals:
+        raise Banned(f"{racer!r} is banned from every board of this event by its organisers")
 
 
 def keep_in_archive(archive: RecordArchive | None, board_id: str, record: Record) -> None:
     """Keep the record in the archive before the push commits: a failed archive write
-    stores nothing (a store error, 503). Its key is the record's content hash, so a push
-    refused or retried afterwards leaves at most an object no row refers to."""
+    stores nothing (a store error, 503). Its key is the record's content hash and the put is
+    conditional, so a push refused or retried afterwards leaves at most one object no row
+    refers to, and no new version."""
     if archive is not None:
         archive.put(board_id, record)
-
-
-def evaluation_fingerprints(record: Record) -> list[str]:
-    """The sha256 of each evaluation's laps that completed a lap (what a copied run keeps,
-    whatever it renames): the board refuses one already there under another racer."""
-    return sorted({_fingerprint(run) for run in record.evaluations if run.laps_completed})
-
-
-def _fingerprint(run: EvaluationRun) -> str:
-    laps = [lap.model_dump(mode="json") for lap in run.laps]
-    return hashlib.sha256(json.dumps(laps, sort_keys=True).encode()).hexdigest()
 
 
 def check_record_size(record: Record) -> None:
@@ -179,9 +305,10 @@ def check_record_size(record: Record) -> None:
                                  "bytes a record may have")
 
 
-def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission, Entry]:
+def scored_write(record: Record, board: Board, at: datetime,
+                 flags: list[str] | None = None) -> tuple[Submission, Entry]:
     """The submission and the candidate entry a record makes on a board, as of ``at``: what a
-    push (or an import) hands the store."""
+    push (or an import) hands the store. ``flags`` are for the organiser: they never move it."""
     score = ranking.score_record(record, board.rules)
     key = racer_key(record.racer)
     score_key = ranking.score_key(score)
@@ -196,6 +323,8 @@ def scored_write(record: Record, board: Board, at: datetime) -> tuple[Submission
         achieved_at=at, score=score, design=design_of(record), score_key=score_key,
         rank_key=ranking.rank_key(score_key, at, key),
     )
+    for flag in flags or []:
+        submission, entry = with_flag(submission, flag), with_flag(entry, flag)
     return submission, entry
 
 

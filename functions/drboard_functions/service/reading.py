@@ -6,8 +6,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from datetime import datetime, timedelta
 
-from drboard_assembler.record import Record
+from drboard_assembler.record import EvaluationRun, Record
 
+from .. import ranking
 from ..cursors import RankCursor, decode_page_cursor, page_cursor
 from ..errors import DesignsPrivate, InvalidQuery, RacerNotFound
 from ..insights import design_facts, differences, shared_facts
@@ -36,6 +37,16 @@ MAX_COMPARED = 4
 DEFAULT_TOP, MAX_TOP = 5, 20
 #: Insights read this many of a board's entries (and their records) as the field.
 INSIGHTS_FIELD = 100
+
+
+def scored_run(record: Record, entry: Entry, board: Board) -> EvaluationRun:
+    """The evaluation run of the record that the entry's score comes from (the one the board's
+    timing method scored, not merely the fastest lap's)."""
+    named = [run for run in record.evaluations if run.source == entry.score.run]
+    if len(named) == 1:
+        return named[0]
+    return min(named or record.evaluations,
+               key=lambda run: ranking.score_key(ranking.score_run(run, board.rules)))
 
 
 class Reading:
@@ -107,14 +118,16 @@ class Reading:
                 page = self.store.history_page(key, board_id,
                                                decode_page_cursor("history", cursor), limit)
             submissions, after = page.submissions, page.after
-        return RacerView(
-            board=self.keeper.view(stored),
-            racer=entry.racer,
-            entry=entry_view(entry, rank, self.keeper.leader(board_id), design=shown),
-            history=[history_item(s, entry) for s in submissions],
-            record=record if shown else None,
-            next_cursor=page_cursor("history", after),
-        )
+        # The stored record goes in as it was stored: today's checks do not run on it again.
+        return RacerView.model_validate({
+            "board": self.keeper.view(stored),
+            "racer": entry.racer,
+            "entry": entry_view(entry, rank, self.keeper.leader(board_id), design=shown),
+            "history": [history_item(s, entry) for s in submissions],
+            "record": record if shown else None,
+            "next_cursor": page_cursor("history", after),
+            "scored_run": scored_run(record, entry, stored.board) if shown else None,
+        }, context={"stored": True})
 
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
         """The racers' designs side by side, and the facts they differ on."""

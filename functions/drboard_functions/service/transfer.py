@@ -1,13 +1,22 @@
-"""A board's export and import: moving a board between an event laptop and the cloud."""
+"""A board's export and import: moving a board between an event laptop and the cloud; and its
+recheck: every stored run indexed for copies and lookalikes, and checked against today's rules.
+
+An import is an organiser's replay: it is never refused for a copied run or a lookalike alias;
+what another racer holds is flagged for the organiser instead (both runs, for a copy).
+"""
 
 from __future__ import annotations
 
 import re
 
-from ..cursors import decode_export_cursor, export_cursor
+from drboard_assembler.aliases import confusable_skeleton
+from drboard_assembler.record import Record
+from pydantic import ValidationError
+
+from ..cursors import decode_export_cursor, decode_page_cursor, export_cursor, page_cursor
 from ..errors import BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
-from ..models.domain import BOARD_ID_PATTERN, Board
+from ..models.domain import BOARD_ID_PATTERN, Board, RunPrint, Submission
 from ..models.requests import ImportedSubmission
 from ..models.transfer import (
     ExportedBoard,
@@ -17,14 +26,19 @@ from ..models.transfer import (
     ImportReceipt,
     StoredSubmissionLine,
 )
-from ..models.views import BoardView
-from ..stores.base import RecordArchive
+from ..models.views import BoardView, FlaggedRun, RecheckPage
+from ..stores.base import RecordArchive, stored_record
 from ..views import board_view
 from .boards import BoardKeeper, check_belongs, default_board_id, live
+from .copies import COPIED, NEAR_COPY, NEAR_MS, evaluation_fingerprints, run_prints, same_laps
 from .pushing import check_record_size, keep_in_archive, scored_write
 
 EXPORT_ENTRIES = 500
 EXPORT_SUBMISSIONS = 25  # with their records, up to 64 KiB each: a page stays under 2 MB
+RECHECK_SUBMISSIONS = 25
+#: A stored run that today's checks would refuse (a tightened rule): for the organiser to look at.
+RULE_CHANGED = "rule-changed"
+LOOKALIKE = "lookalike"
 
 
 class Transfer:
@@ -89,5 +103,89 @@ class Transfer:
         if self.store.get_submission(board_id, submission.racer_key, record.submission_id) is None:
             keep_in_archive(self.archive, board_id, record)
         outcome = self.store.record_submission(submission, record, entry, audit=audit)
+        if not outcome.duplicate:
+            self._check_copies(submission, record, caller)
         return ImportReceipt(status="duplicate" if outcome.duplicate else "created",
                              board_id=board_id, submission_id=record.submission_id)
+
+    def recheck_page(self, board_id: str, cursor: str | None = None,
+                     caller: Caller = LOCAL_ORGANISER) -> RecheckPage:
+        """One page of a board's recheck: each stored submission's runs indexed for copies
+        (their fingerprints claimed on the board where free; the earliest time of each racer
+        kept), its alias's skeleton held; a run whose laps another racer pushed first, or
+        pushed a few milliseconds apart, and an alias that could pass for another racer's, are
+        flagged; so is a record today's checks would refuse (``rule-changed``). Run it after
+        upgrading drboard or tightening a rule; running it again flags nothing new."""
+        self.keeper.require(board_id)
+        after = decode_page_cursor("recheck", cursor) if cursor else None
+        page = self.store.stored_submissions(board_id, after, RECHECK_SUBMISSIONS)
+        flagged: list[FlaggedRun] = []
+        for submission, raw in page.submissions:
+            flagged += self._check_copies(submission, stored_record(raw), caller)
+            problem = _todays_problem(raw)
+            if problem is not None:
+                flagged += self._flag(submission, RULE_CHANGED, problem, caller)
+        if flagged:
+            self.keeper.audit(board_id, "recheck", caller,
+                              detail=f"{len(flagged)} runs flagged for the organiser")
+        return RecheckPage(board_id=board_id, checked=len(page.submissions), flagged=flagged,
+                           next_cursor=page_cursor("recheck", page.after))
+
+    def _check_copies(self, submission: Submission, record: Record,
+                      caller: Caller) -> list[FlaggedRun]:
+        """Index a stored submission for copies and lookalikes, and flag what it finds."""
+        prints = run_prints(record)
+        indexed = self.store.index_submission(submission, prints, evaluation_fingerprints(record),
+                                              confusable_skeleton(record.racer))
+        flagged: list[FlaggedRun] = []
+        if indexed.skeleton_holder is not None:
+            flagged += self._flag(submission, LOOKALIKE, f"the alias could pass for "
+                                  f"{indexed.skeleton_holder!r}'s on the board", caller)
+        for run in prints:
+            flagged += self._copies_of(submission, run, caller)
+        return flagged
+
+    def _copies_of(self, submission: Submission, run: RunPrint, caller: Caller) -> list[FlaggedRun]:
+        flagged: list[FlaggedRun] = []
+        authors = self.store.run_authors(run.fingerprint)  # earliest first
+        if len(authors) > 1:
+            # The first author's earlier submission proves the run theirs: the others are
+            # copies. Pushed at the same moment, nothing tells them apart: both are flagged.
+            first = authors[0]
+            tied = [a for a in authors if a.first_at == first.first_at]
+            copies = authors[1:] if len(tied) == 1 else authors
+            for author in copies:
+                other = self.store.get_submission(author.board_id, author.racer_key,
+                                                  author.submission_id)
+                if other is not None:
+                    flagged += self._flag(other, COPIED, f"the same laps as {first.racer_key!r}'s "
+                                          f"on {first.board_id!r}, pushed first", caller)
+        if run.laps_ms:
+            for near in self.store.near_runs(run.lane, run.laps_ms[0], NEAR_MS):
+                if (near.racer_key != submission.racer_key and near.fingerprint != run.fingerprint
+                        and same_laps(run.laps_ms, near.laps_ms)):
+                    flagged += self._flag(submission, NEAR_COPY, f"laps within {NEAR_MS} ms of "
+                                          f"{near.racer_key!r}'s on {near.board_id!r}", caller)
+        return flagged
+
+    def _flag(self, submission: Submission, flag: str, why: str, caller: Caller) -> list[FlaggedRun]:
+        """Flag a stored run for the organiser, once (an audit event says why)."""
+        if not self.store.flag_submission(submission.board_id, submission.racer_key,
+                                          submission.submission_id, flag):
+            return []
+        self.keeper.audit(submission.board_id, "flag", caller, racer=submission.racer,
+                          submission_id=submission.submission_id, detail=f"{flag}: {why}")
+        return [FlaggedRun(board_id=submission.board_id, racer=submission.racer,
+                           submission_id=submission.submission_id, flag=flag, why=why)]
+
+
+def _todays_problem(raw: str | bytes) -> str | None:
+    """Why today's checks would refuse a stored record (its schema, bounds, lap floors, alias
+    and text rules), or None."""
+    try:
+        Record.model_validate_json(raw)
+    except ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(str(part) for part in first["loc"]) or "record"
+        return f"{where}: {first['msg'].removeprefix('Value error, ')}"
+    return None

@@ -1,8 +1,10 @@
 """The AWS SDK's failures as store errors: the one place the cloud stores translate them.
 
 Throttling (after the SDK's own retries) is :class:`StoreBusy`; a timeout, a lost connection or
-the service's own 5xx is :class:`StoreUnavailable`. Every other error is left as it is: a
-condition that failed is the store's business, and anything else is a fault to see, not hide.
+the service's own 5xx is :class:`StoreUnavailable`; every other error the SDK raises (a request
+the service found invalid, access denied, a missing table or bucket, missing credentials) is
+:class:`StoreFailed`, named after the service's own error, so no store error is a bare 500. A
+condition that failed is the store's business: the stores handle those before this.
 """
 
 from __future__ import annotations
@@ -12,10 +14,10 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any, TypeVar
 
-from botocore.exceptions import ClientError, HTTPClientError
+from botocore.exceptions import BotoCoreError, ClientError, HTTPClientError
 from botocore.exceptions import ConnectionError as SdkConnectionError
 
-from ..errors import StoreBusy, StoreUnavailable
+from ..errors import StoreBusy, StoreFailed, StoreUnavailable
 
 #: What DynamoDB and S3 answer when a caller goes faster than the table or bucket allows.
 THROTTLING_CODES = frozenset({
@@ -40,11 +42,14 @@ def cancellation_codes(error: ClientError) -> list[str]:
     return [str(reason.get("Code", "None")) for reason in reasons]
 
 
-def store_error(error: Exception, what: str) -> StoreBusy | StoreUnavailable | None:
+def store_error(error: Exception, what: str) -> StoreBusy | StoreUnavailable | StoreFailed | None:
     """The store error ``error`` means, or None when it is not one (then let it through)."""
     if isinstance(error, (SdkConnectionError, HTTPClientError)):
         return StoreUnavailable(f"{what} did not answer in time; nothing was stored, try again",
                                 UNAVAILABLE_RETRY_AFTER_S)
+    if isinstance(error, BotoCoreError):
+        return StoreFailed(f"{what} could not be asked ({type(error).__name__}: {error}); "
+                           "nothing was stored", UNAVAILABLE_RETRY_AFTER_S)
     if not isinstance(error, ClientError):
         return None
     code = code_of(error)
@@ -53,7 +58,9 @@ def store_error(error: Exception, what: str) -> StoreBusy | StoreUnavailable | N
     if code in UNAVAILABLE_CODES:
         return StoreUnavailable(f"{what} is unavailable; nothing was stored, try again",
                                 UNAVAILABLE_RETRY_AFTER_S)
-    return None
+    message = str(error.response.get("Error", {}).get("Message", ""))[:200]
+    return StoreFailed(f"{what} refused the request ({code or 'an error'}: {message}); "
+                       "nothing was stored", UNAVAILABLE_RETRY_AFTER_S)
 
 
 def throttled(error: ClientError) -> bool:
@@ -67,7 +74,7 @@ def translated(what: str) -> Iterator[None]:
     """Raise the store error an SDK failure means, from here."""
     try:
         yield
-    except (ClientError, SdkConnectionError, HTTPClientError) as error:
+    except (ClientError, BotoCoreError) as error:
         translated_error = store_error(error, what)
         if translated_error is None:
             raise

@@ -14,7 +14,11 @@ from ..models.domain import (
     AuditEvent,
     Board,
     Entry,
+    EventBans,
+    NearRun,
     RacerTally,
+    RunAuthor,
+    RunPrint,
     Submission,
     SubmissionLimits,
     WriteOutcome,
@@ -28,6 +32,9 @@ class StoredBoard(NamedTuple):
     # Goes up with every change to the standings or the settings, in the same write: a client
     # that saw this version has seen the board as it is.
     version: int = 0
+    # Goes up with every change to the board's settings (its rules, window, limits, bans):
+    # a push commits only if it is still the one it checked against.
+    settings_version: int = 0
 
 
 class LimitReached(Exception):
@@ -54,6 +61,19 @@ class FingerprintTaken(Exception):
         self.racer_key = racer_key
 
 
+class LookalikeTaken(Exception):
+    """Another racer on the board has an alias with the same confusable skeleton."""
+
+    def __init__(self, racer_key: str) -> None:
+        super().__init__(f"a lookalike of {racer_key!r} is on the board")
+        self.racer_key = racer_key
+
+
+class BoardChanged(Exception):
+    """The board's settings or the event's bans changed since the push checked them: nothing
+    was written; check again and retry."""
+
+
 class RankBuild(NamedTuple):
     """How far the building of a board's rank counters got: ``done`` once the board ranks from
     its counters; ``counted`` of its ``participants`` entries counted so far."""
@@ -78,10 +98,11 @@ class SubmissionPage(NamedTuple):
 
 
 def stored_record(raw: str | bytes) -> Record:
-    """A record read back from the board's own store: every field is validated, but its content
-    hash, checked when the record was stored, is not recomputed (the record's own build skips
-    it the same way); that hash is most of the cost of reading a record."""
-    return Record.model_validate_json(raw, context={"draft": True})
+    """A record read back from the board's own store, as it was stored: its shape is validated,
+    but none of today's checks run again (the catalog, the lap floors, the alias and text rules,
+    its content hash — see ``drboard_assembler.record.stored``), so a tightened rule never
+    breaks a read; `drboard board recheck` flags the records it would refuse."""
+    return Record.model_validate_json(raw, context={"stored": True})
 
 
 class BadPageToken(ValueError):
@@ -103,6 +124,19 @@ def read_page_token(token: str, parts: int) -> list[str]:
             and all(isinstance(part, str) for part in position)):
         raise BadPageToken("not a page token")
     return position
+
+
+class AliasSlice(NamedTuple):
+    claims: list[AliasClaim]
+    after: str | None  # where the next page starts; None on the last page
+
+
+class Indexed(NamedTuple):
+    """What indexing a stored submission found held by other racers on its board: each
+    fingerprint's holder, and the holder of its racer's confusable skeleton (None: free)."""
+
+    fingerprint_holders: dict[str, str]
+    skeleton_holder: str | None
 
 
 class StoredSubmissionPage(NamedTuple):
@@ -186,7 +220,9 @@ class BoardStore(NoticeStore, Protocol):
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
                           limits: SubmissionLimits | None = None,
                           fingerprints: Sequence[str] = (),
-                          audit: AuditEvent | None = None) -> WriteOutcome:
+                          audit: AuditEvent | None = None, *,
+                          runs: Sequence[RunPrint] = (), claim: AliasClaim | None = None,
+                          skeleton: str | None = None) -> WriteOutcome:
         """Atomically: store the submission unless its id is already on the board (a duplicate,
         which changes nothing and is never refused), and make ``entry`` the racer's entry if it
         has a strictly lower rank key than the current one (a better score, or an equal score
@@ -196,7 +232,15 @@ class BoardStore(NoticeStore, Protocol):
         reached ``max_submissions``. Each of ``fingerprints`` (its evaluations' content) is
         claimed on the board for the racer: one already held by another racer refuses the push
         with FingerprintTaken, nothing written. ``audit`` is appended in the same transaction.
-        Concurrent calls never lose a submission or a best, and never exceed a limit."""
+        Concurrent calls never lose a submission or a best, and never exceed a limit.
+
+        In the same write, for a new submission: each of ``runs`` is indexed for every board
+        (the racer's first time with its fingerprint, and its laps for near-copies); ``claim``
+        binds the alias to its sign-in (AliasConflict when another holds either, nothing
+        written); ``skeleton`` (the alias's confusable skeleton) is held on the board for the
+        racer (LookalikeTaken when another racer holds it); and when ``limits`` carries the
+        board's settings version or the event's bans version, either having moved raises
+        BoardChanged, nothing written."""
 
     def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
         """One submission of the racer on the board."""
@@ -257,7 +301,52 @@ class BoardStore(NoticeStore, Protocol):
     def audit(self, board_id: str, after: str | None, limit: int) -> AuditSlice:
         """Up to ``limit`` of the board's audit events in time order, after the token ``after``."""
 
+    # ---- copies and lookalikes ----------------------------------------------------------------
+
+    def run_authors(self, fingerprint: str) -> list[RunAuthor]:
+        """Every racer who pushed a run with this fingerprint, on any board, with their first time."""
+
+    def near_runs(self, lane: str, best_ms: int, tolerance_ms: int) -> list[NearRun]:
+        """The indexed runs of the lane whose best complete lap is within ``tolerance_ms``."""
+
+    def fingerprint_holder(self, board_id: str, fingerprint: str) -> str | None:
+        """The racer key holding the fingerprint on the board."""
+
+    def hand_over_fingerprint(self, board_id: str, fingerprint: str, racer_key: str) -> None:
+        """Give the fingerprint on the board to ``racer_key`` (its first author)."""
+
+    def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
+                        flag: str) -> bool:
+        """Add ``flag`` to the submission's score, and to the racer's entry when it is that
+        submission (bumping the board's version); whether anything changed."""
+
+    def index_submission(self, submission: Submission, runs: Sequence[RunPrint],
+                         fingerprints: Sequence[str], skeleton: str | None) -> Indexed:
+        """Index a submission stored before these indexes (a board's recheck): its runs for
+        every board (keeping the earliest time of each racer), each fingerprint and the
+        skeleton claimed on its board where free. What other racers hold is returned."""
+
+    # ---- event-wide bans --------------------------------------------------------------------
+
+    def event_bans(self) -> tuple[EventBans, int]:
+        """The event's bans and their version (0 before any)."""
+
+    def save_event_bans(self, bans: EventBans, version: int) -> int:
+        """Replace the event's bans if their version is still ``version`` (else BoardChanged);
+        the new version."""
+
     # ---- aliases ----------------------------------------------------------------------------
+
+    def assign_alias(self, claim: AliasClaim) -> AliasClaim | None:
+        """Bind the alias to ``claim.principal`` whoever held it (an organiser's hand): the
+        alias's previous claim, if any, and any other alias the principal held, are replaced.
+        Returns the previous claim of the alias."""
+
+    def release_alias(self, racer_key: str) -> AliasClaim | None:
+        """Unbind the alias from its sign-in; the claim removed, if any."""
+
+    def aliases(self, after: str | None, limit: int) -> AliasSlice:
+        """Up to ``limit`` alias claims by racer key, after the store's page token ``after``."""
 
     def claim_alias(self, claim: AliasClaim) -> AliasClaim:
         """Bind the alias to the sign-in, atomically: unless either is bound to another (then

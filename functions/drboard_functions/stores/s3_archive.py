@@ -2,11 +2,14 @@
 
 Keys are ``records/<board_id>/<submission_id>.json`` (the board id percent-encoded, so a board id
 can never step into another prefix). The submission id is the hash of the record's content, so
-the key is content-addressed: the service writes the archive *before* it commits the push, and a
-push retried, refused afterwards (a limit, a copied run) or cut short leaves at most an object no
-row refers to, with the same content as a later successful push would write. Nothing is ever
-committed without its archive. The bucket is versioned and retained by the stack; the board's
-rows never hold more than the record itself.
+the key is content-addressed: the service writes the archive *before* it commits the push (after
+the board's cheap checks), and a push retried, refused afterwards (a copied run, a limit reached
+meanwhile) or cut short leaves at most an object no row refers to, with the same content as a
+later successful push would write. The put is conditional (``If-None-Match: *``): an object
+already there is kept as it is, so a retry adds no version. Nothing is ever committed without its
+archive. The bucket is versioned, expires versions that are no longer current (the template's
+lifecycle rule) and is retained by the stack; the board's rows never hold more than the record
+itself.
 """
 
 from __future__ import annotations
@@ -17,8 +20,8 @@ from urllib.parse import quote
 from botocore.exceptions import BotoCoreError, ClientError
 from drboard_assembler.record import Record
 
-from ..errors import StoreUnavailable
-from .aws_errors import UNAVAILABLE_RETRY_AFTER_S, store_error
+from ..errors import StoreBusy, StoreUnavailable
+from .aws_errors import UNAVAILABLE_RETRY_AFTER_S, code_of, store_error
 
 if TYPE_CHECKING:
     from mypy_boto3_s3 import S3Client
@@ -48,8 +51,25 @@ class S3Archive:
                 Key=self.key(board_id, record.submission_id),
                 Body=record.model_dump_json().encode("utf-8"),
                 ContentType="application/json",
+                IfNoneMatch="*",
             )
-        except (ClientError, BotoCoreError) as error:
-            raise store_error(error, "the record archive") or StoreUnavailable(
-                "the record archive could not keep the record; nothing was stored, try again",
-                UNAVAILABLE_RETRY_AFTER_S) from error
+        except ClientError as error:
+            if code_of(error) in ARCHIVED:
+                return  # the same content is archived (or being archived) already
+            raise _archive_error(error) from error
+        except BotoCoreError as error:
+            raise _archive_error(error) from error
+
+
+#: What a conditional put answers when the object is there already, or being written.
+ARCHIVED = frozenset({"PreconditionFailed", "ConditionalRequestConflict"})
+
+
+def _archive_error(error: Exception) -> StoreBusy | StoreUnavailable:
+    """A failure to archive is a store error: StoreBusy when S3 throttles, StoreUnavailable
+    otherwise (the push stores nothing and answers 503)."""
+    busy = store_error(error, "the record archive")
+    name = code_of(error) if isinstance(error, ClientError) else type(error).__name__
+    return busy if isinstance(busy, StoreBusy) else StoreUnavailable(
+        f"the record archive could not keep the record ({name}); nothing was stored, "
+        "try again", UNAVAILABLE_RETRY_AFTER_S)

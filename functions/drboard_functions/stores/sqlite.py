@@ -26,21 +26,30 @@ from ..models.domain import (
     AuditEvent,
     Board,
     Entry,
+    EventBans,
+    NearRun,
     RacerTally,
+    RunAuthor,
+    RunPrint,
     Submission,
     SubmissionLimits,
     WriteOutcome,
+    with_flag,
 )
 from ..models.notices import Webhook
 from . import rank_buckets
 from .base import (
     AliasConflict,
+    AliasSlice,
     AuditSlice,
+    BoardChanged,
     BoardHasEntries,
     BoardSlice,
     FingerprintTaken,
     HistorySlice,
+    Indexed,
     LimitReached,
+    LookalikeTaken,
     RankBuild,
     StoredBoard,
     StoredSubmissionPage,
@@ -115,7 +124,38 @@ CREATE TABLE IF NOT EXISTS aliases (
     principal TEXT NOT NULL UNIQUE,
     claim     TEXT NOT NULL
 );
+CREATE TABLE IF NOT EXISTS run_authors (
+    fingerprint TEXT NOT NULL,
+    racer_key   TEXT NOT NULL,
+    first_at    TEXT NOT NULL,
+    board_id    TEXT NOT NULL,
+    submission  TEXT NOT NULL,
+    PRIMARY KEY (fingerprint, racer_key)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS near_runs (
+    lane          TEXT NOT NULL,
+    best_ms       INTEGER NOT NULL,
+    fingerprint   TEXT NOT NULL,
+    racer_key     TEXT NOT NULL,
+    board_id      TEXT NOT NULL,
+    submission_id TEXT NOT NULL,
+    laps          TEXT NOT NULL,
+    PRIMARY KEY (lane, best_ms, fingerprint, racer_key, board_id)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS skeletons (
+    board_id  TEXT NOT NULL,
+    skeleton  TEXT NOT NULL,
+    racer_key TEXT NOT NULL,
+    PRIMARY KEY (board_id, skeleton)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS event_settings (
+    name    TEXT PRIMARY KEY,
+    data    TEXT NOT NULL,
+    version INTEGER NOT NULL
+);
 """
+
+EVENT_BANS = "bans"
 
 BUSY_TIMEOUT_S = 30.0
 BUSY_RETRY_AFTER_S = 1
@@ -144,6 +184,9 @@ class SqliteStore:
             columns = {row[1] for row in self._db.execute("PRAGMA table_info(boards)")}
             if "version" not in columns:  # a board file from before versions
                 self._db.execute("ALTER TABLE boards ADD COLUMN version INTEGER NOT NULL DEFAULT 0")
+            if "settings_version" not in columns:  # a board file from before settings versions
+                self._db.execute("ALTER TABLE boards ADD COLUMN settings_version INTEGER NOT NULL "
+                                 "DEFAULT 0")
 
     def _connect(self) -> sqlite3.Connection:
         # Autocommit mode: every write below opens its own BEGIN IMMEDIATE transaction.
@@ -213,7 +256,7 @@ class SqliteStore:
 
     def get_board(self, board_id: str) -> StoredBoard | None:
         row = self._db.execute(
-            "SELECT board, participants, version FROM boards WHERE board_id = ?", (board_id,)
+            f"SELECT {BOARD_COLUMNS} FROM boards WHERE board_id = ?", (board_id,)
         ).fetchone()
         return _board(row) if row else None
 
@@ -232,38 +275,47 @@ class SqliteStore:
                 raise KeyError(board.board_id)
             if only_if_empty and stored.participants:
                 raise BoardHasEntries(board.board_id)
-            db.execute("UPDATE boards SET board = ?, version = version + 1 WHERE board_id = ?",
+            db.execute("UPDATE boards SET board = ?, version = version + 1, "
+                       "settings_version = settings_version + 1 WHERE board_id = ?",
                        (board.model_dump_json(), board.board_id))
         updated = self.get_board(board.board_id)
         assert updated is not None
         return updated
 
     def list_boards(self) -> list[StoredBoard]:
-        rows = self._db.execute("SELECT board, participants, version FROM boards ORDER BY board_id")
+        rows = self._db.execute(f"SELECT {BOARD_COLUMNS} FROM boards ORDER BY board_id")
         return [_board(row) for row in rows]
 
     def boards_page(self, after: str | None, limit: int) -> BoardSlice:
         rows = self._db.execute(
-            "SELECT board, participants, version, board_id FROM boards WHERE board_id > ? "
+            f"SELECT {BOARD_COLUMNS}, board_id FROM boards WHERE board_id > ? "
             "ORDER BY board_id LIMIT ?",
             (read_page_token(after, 1)[0] if after else "", limit + 1)).fetchall()
         page = rows[:limit]
-        return BoardSlice([_board(row[:3]) for row in page],
-                          page_token([page[-1][3]]) if len(rows) > limit else None)
+        return BoardSlice([_board(row[:4]) for row in page],
+                          page_token([page[-1][4]]) if len(rows) > limit else None)
 
     # ---- submissions ----------------------------------------------------------------------
 
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
                           limits: SubmissionLimits | None = None,
                           fingerprints: Sequence[str] = (),
-                          audit: AuditEvent | None = None) -> WriteOutcome:
+                          audit: AuditEvent | None = None, *,
+                          runs: Sequence[RunPrint] = (), claim: AliasClaim | None = None,
+                          skeleton: str | None = None) -> WriteOutcome:
         with self._write() as db:
             current = self._entry(db, entry.board_id, entry.racer_key)
             if self._has_submission(db, submission.board_id, submission.submission_id):
                 return WriteOutcome(duplicate=True, improved=False, entry=current or entry)
             if limits is not None:
+                self._check_versions(db, submission.board_id, limits)
                 _check_limits(self._tally(db, submission.board_id, submission.racer_key), limits)
             self._claim_fingerprints(db, entry.board_id, entry.racer_key, fingerprints)
+            if skeleton is not None:
+                self._hold_skeleton(db, entry.board_id, skeleton, entry.racer_key, strict=True)
+            if claim is not None:
+                self._claim(db, claim)
+            self._index_runs(db, submission, runs)
             if audit is not None:
                 self._append_audit(db, audit)
             db.execute(
@@ -284,6 +336,43 @@ class SqliteStore:
             db.execute("UPDATE boards SET participants = participants + ?, version = version + 1 "
                        "WHERE board_id = ?", (1 if current is None else 0, entry.board_id))
             return WriteOutcome(duplicate=False, improved=True, entry=entry)
+
+    def _check_versions(self, db: sqlite3.Connection, board_id: str, limits: SubmissionLimits) -> None:
+        if limits.settings_version is not None:
+            row = db.execute("SELECT settings_version FROM boards WHERE board_id = ?",
+                             (board_id,)).fetchone()
+            if row is None or int(row[0]) != limits.settings_version:
+                raise BoardChanged(board_id)
+        if limits.bans_version is not None and self._event_bans(db)[1] != limits.bans_version:
+            raise BoardChanged("event bans")
+
+    @staticmethod
+    def _hold_skeleton(db: sqlite3.Connection, board_id: str, skeleton: str, racer_key: str,
+                       strict: bool) -> str | None:
+        row = db.execute("SELECT racer_key FROM skeletons WHERE board_id = ? AND skeleton = ?",
+                         (board_id, skeleton)).fetchone()
+        if row is not None and row[0] != racer_key:
+            if strict:
+                raise LookalikeTaken(row[0])
+            return str(row[0])
+        db.execute("INSERT OR IGNORE INTO skeletons VALUES (?, ?, ?)", (board_id, skeleton, racer_key))
+        return None
+
+    @staticmethod
+    def _index_runs(db: sqlite3.Connection, submission: Submission, runs: Sequence[RunPrint]) -> None:
+        at = ranking.timestamp(submission.submitted_at)
+        for run in runs:
+            db.execute(
+                "INSERT INTO run_authors VALUES (?, ?, ?, ?, ?) ON CONFLICT (fingerprint, racer_key) "
+                "DO UPDATE SET first_at = excluded.first_at, board_id = excluded.board_id, "
+                "submission = excluded.submission WHERE excluded.first_at < first_at",
+                (run.fingerprint, submission.racer_key, at, submission.board_id,
+                 submission.submission_id))
+            if run.laps_ms:
+                db.execute("INSERT OR IGNORE INTO near_runs VALUES (?, ?, ?, ?, ?, ?, ?)",
+                           (run.lane, run.laps_ms[0], run.fingerprint, submission.racer_key,
+                            submission.board_id, submission.submission_id,
+                            ",".join(map(str, run.laps_ms))))
 
     @staticmethod
     def _claim_fingerprints(db: sqlite3.Connection, board_id: str, racer_key: str,
@@ -407,7 +496,7 @@ class SqliteStore:
         row = self._db.execute(
             "SELECT record FROM submissions WHERE board_id = ? AND submission_id = ?",
             (board_id, submission_id)).fetchone()
-        return Record.model_validate_json(row[0]) if row else None
+        return stored_record(row[0]) if row else None
 
     # ---- moderation and audit -------------------------------------------------------------
 
@@ -459,16 +548,128 @@ class SqliteStore:
 
     def claim_alias(self, claim: AliasClaim) -> AliasClaim:
         with self._write() as db:
-            for holder in (self._alias(db, "racer_key", claim.racer_key),
-                           self._alias(db, "principal", claim.principal)):
-                if holder is None:
-                    continue
-                if (holder.racer_key, holder.principal) == (claim.racer_key, claim.principal):
-                    return holder
-                raise AliasConflict(holder)
+            return self._claim(db, claim)
+
+    def _claim(self, db: sqlite3.Connection, claim: AliasClaim) -> AliasClaim:
+        for holder in (self._alias(db, "racer_key", claim.racer_key),
+                       self._alias(db, "principal", claim.principal)):
+            if holder is None:
+                continue
+            if (holder.racer_key, holder.principal) == (claim.racer_key, claim.principal):
+                return holder
+            raise AliasConflict(holder)
+        db.execute("INSERT INTO aliases VALUES (?, ?, ?)",
+                   (claim.racer_key, claim.principal, claim.model_dump_json()))
+        return claim
+
+    def assign_alias(self, claim: AliasClaim) -> AliasClaim | None:
+        with self._write() as db:
+            previous = self._alias(db, "racer_key", claim.racer_key)
+            db.execute("DELETE FROM aliases WHERE racer_key = ? OR principal = ?",
+                       (claim.racer_key, claim.principal))
             db.execute("INSERT INTO aliases VALUES (?, ?, ?)",
                        (claim.racer_key, claim.principal, claim.model_dump_json()))
-            return claim
+            return previous
+
+    def release_alias(self, racer_key: str) -> AliasClaim | None:
+        with self._write() as db:
+            previous = self._alias(db, "racer_key", racer_key)
+            db.execute("DELETE FROM aliases WHERE racer_key = ?", (racer_key,))
+            return previous
+
+    def aliases(self, after: str | None, limit: int) -> AliasSlice:
+        rows = self._db.execute(
+            "SELECT racer_key, claim FROM aliases WHERE racer_key > ? ORDER BY racer_key LIMIT ?",
+            (read_page_token(after, 1)[0] if after else "", limit + 1)).fetchall()
+        page = rows[:limit]
+        return AliasSlice([AliasClaim.model_validate_json(row[1]) for row in page],
+                          page_token([page[-1][0]]) if len(rows) > limit else None)
+
+    # ---- copies and lookalikes ------------------------------------------------------------
+
+    def run_authors(self, fingerprint: str) -> list[RunAuthor]:
+        rows = self._db.execute(
+            "SELECT racer_key, first_at, board_id, submission FROM run_authors WHERE fingerprint = ? "
+            "ORDER BY first_at", (fingerprint,)).fetchall()
+        return [RunAuthor(fingerprint=fingerprint, racer_key=row[0],
+                          first_at=ranking.parse_timestamp(row[1]), board_id=row[2],
+                          submission_id=row[3]) for row in rows]
+
+    def near_runs(self, lane: str, best_ms: int, tolerance_ms: int) -> list[NearRun]:
+        rows = self._db.execute(
+            "SELECT fingerprint, racer_key, board_id, submission_id, laps FROM near_runs "
+            "WHERE lane = ? AND best_ms BETWEEN ? AND ? LIMIT 1000",
+            (lane, best_ms - tolerance_ms, best_ms + tolerance_ms)).fetchall()
+        return [NearRun(fingerprint=row[0], racer_key=row[1], board_id=row[2],
+                        submission_id=row[3], laps_ms=[int(t) for t in row[4].split(",")])
+                for row in rows]
+
+    def fingerprint_holder(self, board_id: str, fingerprint: str) -> str | None:
+        row = self._db.execute("SELECT racer_key FROM fingerprints WHERE board_id = ? AND "
+                               "fingerprint = ?", (board_id, fingerprint)).fetchone()
+        return str(row[0]) if row else None
+
+    def hand_over_fingerprint(self, board_id: str, fingerprint: str, racer_key: str) -> None:
+        with self._write() as db:
+            db.execute("INSERT OR REPLACE INTO fingerprints VALUES (?, ?, ?)",
+                       (board_id, fingerprint, racer_key))
+
+    def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
+                        flag: str) -> bool:
+        with self._write() as db:
+            row = db.execute("SELECT submission FROM submissions WHERE board_id = ? AND "
+                             "submission_id = ? AND racer_key = ?",
+                             (board_id, submission_id, racer_key)).fetchone()
+            if row is None:
+                return False
+            submission = Submission.model_validate_json(row[0])
+            if flag in submission.score.flags:
+                return False
+            db.execute("UPDATE submissions SET submission = ? WHERE board_id = ? AND submission_id = ?",
+                       (with_flag(submission, flag).model_dump_json(), board_id, submission_id))
+            entry = self._entry(db, board_id, racer_key)
+            if entry is not None and entry.submission_id == submission_id:
+                db.execute("UPDATE entries SET entry = ? WHERE board_id = ? AND racer_key = ?",
+                           (with_flag(entry, flag).model_dump_json(), board_id, racer_key))
+                db.execute("UPDATE boards SET version = version + 1 WHERE board_id = ?", (board_id,))
+            return True
+
+    def index_submission(self, submission: Submission, runs: Sequence[RunPrint],
+                         fingerprints: Sequence[str], skeleton: str | None) -> Indexed:
+        with self._write() as db:
+            self._index_runs(db, submission, runs)
+            holders = {}
+            for fingerprint in fingerprints:
+                try:
+                    self._claim_fingerprints(db, submission.board_id, submission.racer_key,
+                                             [fingerprint])
+                except FingerprintTaken as taken:
+                    holders[fingerprint] = taken.racer_key
+            lookalike = None
+            if skeleton is not None:
+                lookalike = self._hold_skeleton(db, submission.board_id, skeleton,
+                                                submission.racer_key, strict=False)
+            return Indexed(holders, lookalike)
+
+    # ---- event-wide bans ------------------------------------------------------------------
+
+    def event_bans(self) -> tuple[EventBans, int]:
+        return self._event_bans(self._db)
+
+    @staticmethod
+    def _event_bans(db: sqlite3.Connection) -> tuple[EventBans, int]:
+        row = db.execute("SELECT data, version FROM event_settings WHERE name = ?",
+                         (EVENT_BANS,)).fetchone()
+        return (EventBans.model_validate_json(row[0]), int(row[1])) if row else (EventBans(), 0)
+
+    def save_event_bans(self, bans: EventBans, version: int) -> int:
+        with self._write() as db:
+            if self._event_bans(db)[1] != version:
+                raise BoardChanged("event bans")
+            db.execute("INSERT INTO event_settings VALUES (?, ?, ?) ON CONFLICT (name) DO UPDATE "
+                       "SET data = excluded.data, version = excluded.version",
+                       (EVENT_BANS, bans.model_dump_json(), version + 1))
+            return version + 1
 
     def alias_of(self, principal: str) -> AliasClaim | None:
         return self._alias(self._db, "principal", principal)
@@ -554,5 +755,8 @@ def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
         raise LimitReached(tally)
 
 
-def _board(row: tuple[str, int, int]) -> StoredBoard:
-    return StoredBoard(Board.model_validate_json(row[0]), int(row[1]), int(row[2]))
+BOARD_COLUMNS = "board, participants, version, settings_version"
+
+
+def _board(row: tuple[str, int, int, int]) -> StoredBoard:
+    return StoredBoard(Board.model_validate_json(row[0]), int(row[1]), int(row[2]), int(row[3]))

@@ -20,11 +20,24 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
 - ``A#<event_id>``: one audit event (``data``), written once and never changed;
 - ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``).
 
+- ``K#<skeleton>``: an alias's confusable skeleton on the board, and the racer (``racer_key``)
+  who holds it: a lookalike alias under another racer fails the push transaction;
+- ``#BOARD`` also carries ``settings_version``, bumped by every change to the board's settings:
+  a push commits on condition that it is still the one the push checked against.
+
 Aliases live in a partition of their own, ``#ALIAS`` (no board id starts with ``#``): ``K#<key>``
 holds an alias's claim and ``P#<principal>`` the same claim by its sign-in. Webhooks live in
 ``#WEBHOOK`` (sort key ``<target key>#<webhook id>``, the webhook in ``data``), and the markers of
 announcements sent in ``#NOTICE`` (``<event id>#<webhook id>``: ``state``, ``lease_until``, and
-``expires_at`` for the table's time to live).
+``expires_at`` for the table's time to live). Partitions of their own too, since they hold what
+spans boards:
+
+- ``#RUN#<fingerprint>``: ``R#<racer_key>`` for each racer who pushed a run with that fingerprint,
+  with their first time (``first_at``) and board (``board_id``): the first author holds the run;
+- ``#LAPS#<lane>``: ``<best lap ms>#<fingerprint>#<racer_key>#<board_id>`` for each run long
+  enough to be compared, with its sorted lap times (``laps``): the near-copy index, read as one
+  range of best laps;
+- ``#EVENT``: ``#BANS``, the bans across every board of the deployment (``data``, ``version``).
 """
 
 from __future__ import annotations
@@ -35,7 +48,16 @@ from typing import TYPE_CHECKING
 from drboard_assembler.record import Record
 
 from ... import ranking
-from ...models.domain import AliasClaim, AuditEvent, Board, Entry, Submission
+from ...models.domain import (
+    AliasClaim,
+    AuditEvent,
+    Board,
+    Entry,
+    NearRun,
+    RunAuthor,
+    RunPrint,
+    Submission,
+)
 from ..base import StoredBoard
 
 if TYPE_CHECKING:
@@ -45,6 +67,9 @@ if TYPE_CHECKING:
 
 BOARD_SK = "#BOARD"
 ALIAS_PARTITION = "#ALIAS"
+EVENT_PARTITION = "#EVENT"
+BANS_SK = "#BANS"
+BEST_DIGITS = 10
 WEBHOOK_PARTITION = "#WEBHOOK"
 NOTICE_PARTITION = "#NOTICE"
 FIRST_ENTRY = "0"  # every entry's rank key sorts after this, the board's before it
@@ -73,6 +98,26 @@ def tally_sk(racer_key: str) -> str:
 
 def fingerprint_sk(fingerprint: str) -> str:
     return f"F#{fingerprint}"
+
+
+def skeleton_sk(skeleton: str) -> str:
+    return f"K#{skeleton}"
+
+
+def run_partition(fingerprint: str) -> str:
+    return f"#RUN#{fingerprint}"
+
+
+def author_sk(racer_key: str) -> str:
+    return f"R#{racer_key}"
+
+
+def lane_partition(lane: str) -> str:
+    return f"#LAPS#{lane}"
+
+
+def near_sk(best_ms: int, fingerprint: str = "", racer_key: str = "", board_id: str = "") -> str:
+    return f"{best_ms:0{BEST_DIGITS}d}#{fingerprint}#{racer_key}#{board_id}"
 
 
 def audit_sk(event_id: str) -> str:
@@ -129,6 +174,27 @@ def audit_item(event: AuditEvent) -> Item:
             "data": text(event.model_dump_json())}
 
 
+def near_item(run: RunPrint, submission: Submission) -> Item:
+    laps = run.laps_ms or []
+    return {"board": text(lane_partition(run.lane)),
+            "sk": text(near_sk(laps[0], run.fingerprint, submission.racer_key, submission.board_id)),
+            "fingerprint": text(run.fingerprint), "racer_key": text(submission.racer_key),
+            "board_id": text(submission.board_id), "submission_id": text(submission.submission_id),
+            "laps": text(",".join(map(str, laps)))}
+
+
+def near_run_of(item: Item) -> NearRun:
+    return NearRun(fingerprint=item["fingerprint"]["S"], racer_key=item["racer_key"]["S"],
+                   board_id=item["board_id"]["S"], submission_id=item["submission_id"]["S"],
+                   laps_ms=[int(t) for t in item["laps"]["S"].split(",")])
+
+
+def run_author_of(fingerprint: str, item: Item) -> RunAuthor:
+    return RunAuthor(fingerprint=fingerprint, racer_key=item["racer_key"]["S"],
+                     first_at=ranking.parse_timestamp(item["first_at"]["S"]),
+                     board_id=item["board_id"]["S"], submission_id=item["submission_id"]["S"])
+
+
 def alias_items(claim: AliasClaim) -> list[Item]:
     data = text(claim.model_dump_json())
     return [{"board": text(ALIAS_PARTITION), "sk": text(f"K#{claim.racer_key}"), "data": data},
@@ -140,6 +206,10 @@ def record_item(board_id: str, record: Record) -> Item:
             "record": {"B": zlib.compress(record.model_dump_json().encode())}}
 
 
+def skeleton_item(board_id: str, skeleton: str, racer_key: str) -> Item:
+    return {"board": text(board_id), "sk": text(skeleton_sk(skeleton)), "racer_key": text(racer_key)}
+
+
 def fingerprint_item(board_id: str, fingerprint: str, racer_key: str) -> Item:
     return {"board": text(board_id), "sk": text(fingerprint_sk(fingerprint)),
             "racer_key": text(racer_key)}
@@ -149,7 +219,8 @@ def fingerprint_item(board_id: str, fingerprint: str, racer_key: str) -> Item:
 
 def stored_board(item: Item) -> StoredBoard:
     return StoredBoard(Board.model_validate_json(item["data"]["S"]), int(item["participants"]["N"]),
-                       int(item.get("board_version", {"N": "0"})["N"]))
+                       int(item.get("board_version", {"N": "0"})["N"]),
+                       int(item.get("settings_version", {"N": "0"})["N"]))
 
 
 def entry_of(item: Item) -> Entry:

@@ -23,19 +23,27 @@ from ...models.domain import (
     AuditEvent,
     Board,
     Entry,
+    EventBans,
+    NearRun,
     RacerTally,
+    RunAuthor,
+    RunPrint,
     Submission,
     SubmissionLimits,
     WriteOutcome,
+    with_flag,
 )
 from ...models.notices import Webhook
 from ..aws_errors import cancellation_codes, code_of, translating
 from ..base import (
     AliasConflict,
+    AliasSlice,
     AuditSlice,
+    BoardChanged,
     BoardHasEntries,
     BoardSlice,
     HistorySlice,
+    Indexed,
     RankBuild,
     StoredBoard,
     StoredSubmissionPage,
@@ -47,9 +55,11 @@ from ..base import (
 )
 from .codecs import (
     ALIAS_PARTITION,
+    BANS_SK,
     BOARD_KIND,
     BOARD_SK,
     BOARDS_INDEX,
+    EVENT_PARTITION,
     FIRST_ENTRY,
     NOTICE_PARTITION,
     RACER_INDEX,
@@ -59,15 +69,26 @@ from .codecs import (
     audit_event_of,
     audit_item,
     audit_sk,
+    author_sk,
     board_item,
     claim_of,
     entry_item,
     entry_of,
     entry_sk,
+    fingerprint_item,
+    fingerprint_sk,
     key,
+    lane_partition,
+    near_item,
+    near_run_of,
+    near_sk,
     record_json,
     record_sk,
+    run_author_of,
+    run_partition,
+    skeleton_item,
     stored_board,
+    submission_item,
     submission_of,
     submission_sk,
     tally_sk,
@@ -75,11 +96,16 @@ from .codecs import (
 )
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
-from .transaction import PushTransaction
+from .transaction import PushTransaction, bans_condition
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
-    from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef, QueryInputTypeDef
+    from mypy_boto3_dynamodb.type_defs import (
+        AttributeValueTypeDef,
+        PutItemInputTypeDef,
+        QueryInputTypeDef,
+        TransactWriteItemTypeDef,
+    )
 
     from .codecs import Item
 
@@ -127,7 +153,8 @@ class DynamoDbStore:
         try:
             self.client.update_item(
                 TableName=self.table, Key=key(board.board_id, BOARD_SK),
-                UpdateExpression="SET #data = :data ADD board_version :one", ConditionExpression=condition,
+                UpdateExpression="SET #data = :data ADD board_version :one, settings_version :one",
+                ConditionExpression=condition,
                 ExpressionAttributeNames={"#data": "data"}, ExpressionAttributeValues=values)
         except ClientError as error:
             if code_of(error) != "ConditionalCheckFailedException":
@@ -166,8 +193,147 @@ class DynamoDbStore:
     def record_submission(self, submission: Submission, record: Record, entry: Entry,
                           limits: SubmissionLimits | None = None,
                           fingerprints: Sequence[str] = (),
-                          audit: AuditEvent | None = None) -> WriteOutcome:
-        return PushTransaction(self, submission, record, entry, limits, fingerprints, audit).run()
+                          audit: AuditEvent | None = None, *,
+                          runs: Sequence[RunPrint] = (), claim: AliasClaim | None = None,
+                          skeleton: str | None = None) -> WriteOutcome:
+        return PushTransaction(self, submission, record, entry, limits, fingerprints, audit,
+                               runs=runs, claim=claim, skeleton=skeleton).run()
+
+    # ---- copies and lookalikes ------------------------------------------------------------
+
+    def run_authors(self, fingerprint: str) -> list[RunAuthor]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :run",
+            "ExpressionAttributeValues": {":run": text(run_partition(fingerprint))}})
+        return sorted((run_author_of(fingerprint, item) for item in items),
+                      key=lambda author: author.first_at)
+
+    def near_runs(self, lane: str, best_ms: int, tolerance_ms: int) -> list[NearRun]:
+        items = self._query({
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :lane AND sk BETWEEN :low AND :high",
+            "ExpressionAttributeValues": {
+                ":lane": text(lane_partition(lane)),
+                ":low": text(near_sk(max(0, best_ms - tolerance_ms))),
+                ":high": text(near_sk(best_ms + tolerance_ms) + "~")}}, limit=1000)
+        return [near_run_of(item) for item in items]
+
+    def fingerprint_holder(self, board_id: str, fingerprint: str) -> str | None:
+        item = self.get_item(board_id, fingerprint_sk(fingerprint))
+        return item["racer_key"]["S"] if item else None
+
+    def hand_over_fingerprint(self, board_id: str, fingerprint: str, racer_key: str) -> None:
+        self.client.put_item(TableName=self.table,
+                             Item=fingerprint_item(board_id, fingerprint, racer_key))
+
+    def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
+                        flag: str) -> bool:
+        for attempt in range(MAX_ATTEMPTS):
+            if attempt:
+                backoff(attempt)
+            item = self.get_item(board_id, submission_sk(racer_key, submission_id))
+            if item is None:
+                return False
+            submission = submission_of(item)
+            if flag in submission.score.flags:
+                return False
+            entry = self.get_entry(board_id, racer_key)
+            flagged = submission_item(with_flag(submission, flag))
+            writes: list[TransactWriteItemTypeDef] = [{"Put": {
+                "TableName": self.table, "Item": flagged, "ConditionExpression": "#data = :seen",
+                "ExpressionAttributeNames": {"#data": "data"},
+                "ExpressionAttributeValues": {":seen": item["data"]}}}]
+            if entry is not None and entry.submission_id == submission_id:
+                writes.append({"Put": {
+                    "TableName": self.table, "Item": entry_item(with_flag(entry, flag)),
+                    "ConditionExpression": "rank_key = :seen",
+                    "ExpressionAttributeValues": {":seen": text(entry.rank_key)}}})
+                writes.append({"Update": {
+                    "TableName": self.table, "Key": key(board_id, BOARD_SK),
+                    "UpdateExpression": "ADD board_version :one",
+                    "ExpressionAttributeValues": {":one": {"N": "1"}}}})
+            try:
+                self.client.transact_write_items(TransactItems=writes)
+            except ClientError as error:
+                if code_of(error) != "TransactionCanceledException":
+                    raise
+                continue  # the submission or the entry changed meanwhile: look again
+            return True
+        raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up flagging a run; "
+                        "try again in a moment")
+
+    def index_submission(self, submission: Submission, runs: Sequence[RunPrint],
+                         fingerprints: Sequence[str], skeleton: str | None) -> Indexed:
+        for run in runs:
+            self.index_author(submission, run.fingerprint)
+            if run.laps_ms:
+                self.client.put_item(TableName=self.table, Item=near_item(run, submission))
+        holders = {}
+        for fingerprint in fingerprints:
+            holder = self._hold(submission.board_id, fingerprint_item(
+                submission.board_id, fingerprint, submission.racer_key))
+            if holder is not None:
+                holders[fingerprint] = holder
+        lookalike = None
+        if skeleton is not None:
+            lookalike = self._hold(submission.board_id, skeleton_item(
+                submission.board_id, skeleton, submission.racer_key))
+        return Indexed(holders, lookalike)
+
+    def index_author(self, submission: Submission, fingerprint: str) -> None:
+        """The racer's first time with the run: kept unless this one is earlier."""
+        try:
+            self.client.update_item(
+                TableName=self.table,
+                Key=key(run_partition(fingerprint), author_sk(submission.racer_key)),
+                UpdateExpression="SET first_at = :at, board_id = :board, racer_key = :racer, "
+                                 "submission_id = :submission",
+                ConditionExpression="attribute_not_exists(first_at) OR first_at > :at",
+                ExpressionAttributeValues={
+                    ":at": text(ranking.timestamp(submission.submitted_at)),
+                    ":board": text(submission.board_id), ":racer": text(submission.racer_key),
+                    ":submission": text(submission.submission_id)})
+        except ClientError as error:
+            if code_of(error) != "ConditionalCheckFailedException":
+                raise
+
+    def _hold(self, board_id: str, item: Item) -> str | None:
+        """Put a racer's claim item unless another racer holds it; that racer's key, if so."""
+        try:
+            self.client.put_item(TableName=self.table, Item=item,
+                                 ConditionExpression="attribute_not_exists(sk) OR racer_key = :me",
+                                 ExpressionAttributeValues={":me": item["racer_key"]})
+        except ClientError as error:
+            if code_of(error) != "ConditionalCheckFailedException":
+                raise
+            held = self.get_item(board_id, item["sk"]["S"])
+            return held["racer_key"]["S"] if held else None
+        return None
+
+    # ---- event-wide bans ------------------------------------------------------------------
+
+    def event_bans(self) -> tuple[EventBans, int]:
+        item = self.get_item(EVENT_PARTITION, BANS_SK)
+        if item is None:
+            return EventBans(), 0
+        return EventBans.model_validate_json(item["data"]["S"]), int(item["version"]["N"])
+
+    def save_event_bans(self, bans: EventBans, version: int) -> int:
+        condition, values = bans_condition(version)
+        request: PutItemInputTypeDef = {
+            "TableName": self.table, "ConditionExpression": condition,
+            "Item": {**key(EVENT_PARTITION, BANS_SK), "data": text(bans.model_dump_json()),
+                     "version": {"N": str(version + 1)}}}
+        if values:
+            request["ExpressionAttributeValues"] = values
+        try:
+            self.client.put_item(**request)
+        except ClientError as error:
+            if code_of(error) != "ConditionalCheckFailedException":
+                raise
+            raise BoardChanged("event bans") from None
+        return version + 1
 
     # ---- moderation and audit -------------------------------------------------------------
 
@@ -258,6 +424,42 @@ class DynamoDbStore:
                 raise AliasConflict(holder) from None
             raise  # pragma: no cover - cancelled, yet neither item exists
         return claim
+
+    def assign_alias(self, claim: AliasClaim) -> AliasClaim | None:
+        previous = self.alias_holder(claim.racer_key)
+        held = self.alias_of(claim.principal)
+        writes: list[TransactWriteItemTypeDef] = [
+            {"Put": {"TableName": self.table, "Item": item}} for item in alias_items(claim)]
+        if previous is not None and previous.principal != claim.principal:
+            writes.append({"Delete": {"TableName": self.table,
+                                      "Key": key(ALIAS_PARTITION, f"P#{previous.principal}")}})
+        if held is not None and held.racer_key != claim.racer_key:
+            writes.append({"Delete": {"TableName": self.table,
+                                      "Key": key(ALIAS_PARTITION, f"K#{held.racer_key}")}})
+        self.client.transact_write_items(TransactItems=writes)
+        return previous
+
+    def release_alias(self, racer_key: str) -> AliasClaim | None:
+        previous = self.alias_holder(racer_key)
+        if previous is not None:
+            self.client.transact_write_items(TransactItems=[
+                {"Delete": {"TableName": self.table, "Key": key(ALIAS_PARTITION, f"K#{racer_key}")}},
+                {"Delete": {"TableName": self.table,
+                            "Key": key(ALIAS_PARTITION, f"P#{previous.principal}")}}])
+        return previous
+
+    def aliases(self, after: str | None, limit: int) -> AliasSlice:
+        request: QueryInputTypeDef = {
+            "TableName": self.table, "ConsistentRead": True,
+            "KeyConditionExpression": "board = :aliases AND begins_with(sk, :prefix)",
+            "ExpressionAttributeValues": {":aliases": text(ALIAS_PARTITION), ":prefix": text("K#")},
+        }
+        if after is not None:
+            [racer_key] = read_page_token(after, 1)
+            request["ExclusiveStartKey"] = key(ALIAS_PARTITION, f"K#{racer_key}")
+        items, more = self._page(request, limit)
+        claims = [claim_of(item) for item in items]
+        return AliasSlice(claims, page_token([claims[-1].racer_key]) if more and claims else None)
 
     def alias_of(self, principal: str) -> AliasClaim | None:
         item = self.get_item(ALIAS_PARTITION, f"P#{principal}")
@@ -395,7 +597,7 @@ class DynamoDbStore:
             "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
             "KeyConditionExpression": "board = :board",
             "ExpressionAttributeValues": {":board": text(board_id)},
-            "ProjectionExpression": "sk, #data, participants, board_version",
+            "ProjectionExpression": "sk, #data, participants, board_version, settings_version",
             "ExpressionAttributeNames": {"#data": "data"},
         }
         items = self._query(request, limit=limit + 1)
@@ -474,7 +676,7 @@ class DynamoDbStore:
 
     def get_record(self, board_id: str, submission_id: str) -> Record | None:
         item = self.get_item(board_id, record_sk(submission_id))
-        return Record.model_validate_json(record_json(item)) if item else None
+        return stored_record(record_json(item)) if item else None
 
     # ---- plumbing -------------------------------------------------------------------------
 

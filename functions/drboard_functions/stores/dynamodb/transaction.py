@@ -6,7 +6,11 @@ that the board's limits allow it; each evaluation's fingerprint is claimed unles
 holds it; the audit event is written; and the entry is put if the racer has none (the board's
 ``participants`` + 1 in the same transaction) or if it is strictly better — a condition on the
 stored entry, so concurrent pushes never lose a best nor pass a limit — with the rank counters
-moved to match.
+moved to match. It also claims, when the push asks, the racer's alias and its confusable skeleton
+on the board, on condition that the board's settings and the event's bans are still those the
+push checked (``settings``, ``bans``). A write whose outcome the service did not report (a timeout
+after the commit) is settled by reading the submission back; the runs' index for every board is
+written once the push has committed.
 """
 
 from __future__ import annotations
@@ -15,22 +19,39 @@ from collections.abc import Sequence
 from datetime import timedelta
 from typing import TYPE_CHECKING, Any
 
-from botocore.exceptions import ClientError
+from botocore.exceptions import BotoCoreError, ClientError
 from drboard_assembler.record import Record
 
 from ... import ranking
-from ...errors import BoardNotFound, StoreBusy
-from ...models.domain import AuditEvent, Entry, Submission, SubmissionLimits, WriteOutcome
-from ..aws_errors import cancellation_codes, code_of
-from ..base import FingerprintTaken, LimitReached
+from ...errors import BoardNotFound, StoreBusy, StoreError, StoreUnavailable
+from ...models.domain import (
+    AliasClaim,
+    AuditEvent,
+    Entry,
+    RunPrint,
+    Submission,
+    SubmissionLimits,
+    WriteOutcome,
+)
+from ..aws_errors import UNAVAILABLE_RETRY_AFTER_S, cancellation_codes, code_of, store_error
+from ..base import AliasConflict, BoardChanged, FingerprintTaken, LimitReached, LookalikeTaken
 from .codecs import (
+    ALIAS_PARTITION,
+    BANS_SK,
+    BOARD_SK,
+    EVENT_PARTITION,
+    alias_items,
     audit_item,
     entry_item,
     fingerprint_item,
     fingerprint_sk,
     key,
+    near_item,
     record_item,
+    skeleton_item,
+    skeleton_sk,
     submission_item,
+    submission_sk,
     tally_sk,
     text,
 )
@@ -38,11 +59,16 @@ from .ranks import LAZY_BUILD_MAX_RACERS, RankState
 from .retries import MAX_ATTEMPTS, backoff
 
 if TYPE_CHECKING:
-    from mypy_boto3_dynamodb.type_defs import TransactWriteItemTypeDef
+    from mypy_boto3_dynamodb.type_defs import (
+        AttributeValueTypeDef,
+        ConditionCheckTypeDef,
+        TransactWriteItemTypeDef,
+    )
 
     from .store import DynamoDbStore
 
 FAILED = "ConditionalCheckFailed"
+BATCH_WRITE_ITEMS = 25
 
 
 class Slots:
@@ -66,10 +92,38 @@ class Slots:
                 if code == FAILED}
 
 
+def settings_condition(version: int) -> tuple[str, dict[str, AttributeValueTypeDef]]:
+    """The board item's condition that its settings are still at ``version`` (a board from
+    before settings versions is at 0)."""
+    if version == 0:
+        return "attribute_not_exists(settings_version) OR settings_version = :settings", {
+            ":settings": {"N": "0"}}
+    return "settings_version = :settings", {":settings": {"N": str(version)}}
+
+
+def bans_condition(version: int) -> tuple[str, dict[str, AttributeValueTypeDef]]:
+    """The event bans item's condition that they are still at ``version`` (0: none yet)."""
+    if version == 0:
+        return "attribute_not_exists(sk)", {}
+    return "version = :bans", {":bans": {"N": str(version)}}
+
+
+def with_settings(change: TransactWriteItemTypeDef, settings: int | None) -> TransactWriteItemTypeDef:
+    """The board's update, on condition too that its settings are still at version ``settings``."""
+    if settings is None:
+        return change
+    update: Any = dict(change["Update"])
+    unchanged, values = settings_condition(settings)
+    update["ConditionExpression"] = f"({update['ConditionExpression']}) AND ({unchanged})"
+    update["ExpressionAttributeValues"] = {**update["ExpressionAttributeValues"], **values}
+    return {"Update": update}
+
+
 class PushTransaction:
     def __init__(self, store: DynamoDbStore, submission: Submission, record: Record, entry: Entry,
                  limits: SubmissionLimits | None, fingerprints: Sequence[str],
-                 audit: AuditEvent | None) -> None:
+                 audit: AuditEvent | None, *, runs: Sequence[RunPrint] = (),
+                 claim: AliasClaim | None = None, skeleton: str | None = None) -> None:
         self.store = store
         self.table = store.table
         self.submission = submission
@@ -78,6 +132,9 @@ class PushTransaction:
         self.limits = limits
         self.fingerprints = fingerprints
         self.audit = audit
+        self.runs = runs
+        self.claim = claim
+        self.skeleton = skeleton
 
     def run(self) -> WriteOutcome:
         board_id, racer = self.entry.board_id, self.entry.racer_key
@@ -92,22 +149,31 @@ class PushTransaction:
             current = self.store.get_entry(board_id, racer)
             slots = self._slots(current, state)
             try:
-                self.store.client.transact_write_items(TransactItems=slots.items)
+                self._commit(slots)
             except ClientError as error:
                 if code_of(error) != "TransactionCanceledException":
                     raise
                 failed = slots.failed(error)
                 if "submission" in failed:
                     return self._duplicate()
+                if "settings" in failed or "bans" in failed:
+                    raise BoardChanged(board_id) from None
                 if "tally" in failed:
                     raise LimitReached(self.store.tally(board_id, racer)) from None
                 if "fingerprint" in failed:
                     raise FingerprintTaken(self._copied_from()) from None
+                if "skeleton" in failed:
+                    raise LookalikeTaken(self._held(skeleton_sk(self.skeleton or ""))) from None
+                if "alias" in failed:
+                    raise AliasConflict(self._alias_holder()) from None
                 if "board" in failed:
-                    # No board, or its rank counters were built (or a build moved) meanwhile.
+                    # No board, its rank counters were built (or a build moved) meanwhile, or its
+                    # settings changed.
                     state = ranks.state(board_id)
                     if not state.exists:
                         raise BoardNotFound(f"no board {board_id!r}") from None
+                    if self._settings_moved():
+                        raise BoardChanged(board_id) from None
                     continue
                 if not failed and "TransactionConflict" not in cancellation_codes(error):
                     raise
@@ -115,6 +181,39 @@ class PushTransaction:
             return self._stored(current)
         raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up after {MAX_ATTEMPTS} "
                         "attempts, nothing was stored; try again in a moment")
+
+    def _commit(self, slots: Slots) -> None:
+        """Write the transaction. A failure that does not say whether it was written (a
+        timeout, a lost connection, throttling or an error reported after the write) is
+        settled by reading the submission back: stored means committed (the answer is then
+        the write's, not an error); not stored means nothing was written."""
+        try:
+            self.store.client.transact_write_items(TransactItems=slots.items)
+        except Exception as error:
+            if isinstance(error, ClientError) and code_of(error) in (
+                    "TransactionCanceledException", "ValidationException"):
+                raise
+            if store_error(error, "the board's table") is None and not isinstance(error, ClientError):
+                raise
+            written = self._written()
+            if written is None:
+                raise StoreUnavailable(
+                    "the board's table did not say whether it stored the run: push it again "
+                    "(a run already stored is answered as a duplicate, with its rank)",
+                    UNAVAILABLE_RETRY_AFTER_S) from error
+            if not written:
+                raise
+
+    def _written(self) -> bool | None:
+        """Whether this push's submission is stored (None: that cannot be read either)."""
+        try:
+            item = self.store.client.get_item(
+                TableName=self.table, ConsistentRead=True,
+                Key=key(self.submission.board_id,
+                        submission_sk(self.submission.racer_key, self.submission.submission_id)))
+        except Exception:
+            return None
+        return "Item" in item
 
     def _slots(self, current: Entry | None, state: RankState) -> Slots:
         board_id, entry = self.entry.board_id, self.entry
@@ -131,20 +230,70 @@ class PushTransaction:
             "ExpressionAttributeValues": {":me": text(entry.racer_key)}}} for f in self.fingerprints])
         if self.audit is not None:
             slots.add("audit", {"Put": {"TableName": self.table, "Item": audit_item(self.audit)}})
+        self._add_claims(slots)
+        settings = self.limits.settings_version if self.limits is not None else None
         if current is None:
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "attribute_not_exists(sk)"}})
-            slots.add("board", self.store.ranks.board_change(board_id, +1, state))
+            slots.add("board", with_settings(self.store.ranks.board_change(board_id, +1, state),
+                                             settings))
         elif entry.rank_key < current.rank_key:
             # Exactly the entry read: the counters take its score off.
             slots.add("entry", {"Put": {"TableName": self.table, "Item": entry_item(entry),
                                         "ConditionExpression": "rank_key = :seen",
                                         "ExpressionAttributeValues": {":seen": text(current.rank_key)}}})
-            slots.add("board", self.store.ranks.board_change(board_id, 0, state))
+            slots.add("board", with_settings(self.store.ranks.board_change(board_id, 0, state),
+                                             settings))
         else:
+            if settings is not None:  # the entry stays: the board's settings are checked alone
+                condition, values = settings_condition(settings)
+                slots.add("settings", {"ConditionCheck": {
+                    "TableName": self.table, "Key": key(board_id, BOARD_SK),
+                    "ConditionExpression": condition, "ExpressionAttributeValues": values}})
             return slots  # not better: the entry stays as it is (entries only ever improve)
         slots.extend("counters", self.store.ranks.changes(board_id, state, entry, current))
         return slots
+
+    def _add_claims(self, slots: Slots) -> None:
+        """The event's bans unchanged, the alias's claim, the skeleton held on the board, and
+        the runs indexed for every board, in the push's own transaction."""
+        board_id, racer = self.entry.board_id, self.entry.racer_key
+        if self.limits is not None and self.limits.bans_version is not None:
+            condition, values = bans_condition(self.limits.bans_version)
+            check: ConditionCheckTypeDef = {"TableName": self.table,
+                                            "Key": key(EVENT_PARTITION, BANS_SK),
+                                            "ConditionExpression": condition}
+            if values:
+                check["ExpressionAttributeValues"] = values
+            slots.add("bans", {"ConditionCheck": check})
+        if self.claim is not None:
+            slots.extend("alias", [{"Put": {"TableName": self.table, "Item": item,
+                                            "ConditionExpression": "attribute_not_exists(sk)"}}
+                                   for item in alias_items(self.claim)])
+        if self.skeleton is not None:
+            slots.add("skeleton", {"Put": {
+                "TableName": self.table, "Item": skeleton_item(board_id, self.skeleton, racer),
+                "ConditionExpression": "attribute_not_exists(sk) OR racer_key = :me",
+                "ExpressionAttributeValues": {":me": text(racer)}}})
+
+    def _settings_moved(self) -> bool:
+        if self.limits is None or self.limits.settings_version is None:
+            return False
+        stored = self.store.get_board(self.entry.board_id)
+        return stored is None or stored.settings_version != self.limits.settings_version
+
+    def _held(self, sk: str) -> str:
+        item = self.store.get_item(self.entry.board_id, sk)
+        return item["racer_key"]["S"] if item else "another racer"
+
+    def _alias_holder(self) -> AliasClaim:
+        claim = self.claim
+        assert claim is not None
+        for sk in (f"K#{claim.racer_key}", f"P#{claim.principal}"):
+            holder = self.store.get_item(ALIAS_PARTITION, sk)
+            if holder is not None:
+                return AliasClaim.model_validate_json(holder["data"]["S"])
+        return claim
 
     def _count_submission(self) -> Any:
         """The tally's update, conditioned on the limits: the racer's last submission is old
@@ -177,9 +326,27 @@ class PushTransaction:
     def _stored(self, current: Entry | None) -> WriteOutcome:
         if self.limits is None:
             self._advance_last_submitted()
+        self._index_runs()
         if current is None or self.entry.rank_key < current.rank_key:
             return WriteOutcome(duplicate=False, improved=True, entry=self.entry)
         return WriteOutcome(duplicate=False, improved=False, entry=current)
+
+    def _index_runs(self) -> None:
+        """Index the runs for every board, once the push has committed (a record may hold 50
+        runs: their items would not fit the transaction). The push is stored whatever happens
+        here; a run left out is indexed by the board's next recheck."""
+        try:
+            for run in self.runs:
+                self.store.index_author(self.submission, run.fingerprint)
+            nears = [near_item(run, self.submission) for run in self.runs if run.laps_ms]
+            for start in range(0, len(nears), BATCH_WRITE_ITEMS):
+                pending: Any = {self.table: [{"PutRequest": {"Item": item}}
+                                             for item in nears[start:start + BATCH_WRITE_ITEMS]]}
+                while pending:
+                    pending = self.store.client.batch_write_item(
+                        RequestItems=pending).get("UnprocessedItems") or None
+        except (ClientError, BotoCoreError, StoreError):
+            pass
 
     def _advance_last_submitted(self) -> None:
         submission = self.submission
