@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from figures import Report, p50_p95, timed_ms  # noqa: E402
+from figures import Report, p50_p95, timed_ms
 
 #: The PNG of a card must be drawn well inside a link preview's patience (a few seconds) and
 #: the function's timeout: a generous bound on this machine.
