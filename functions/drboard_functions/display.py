@@ -5,6 +5,7 @@ from __future__ import annotations
 from datetime import UTC, datetime
 
 from .models.domain import Design, TimingMethod
+from .models.seasons import PointsTable, RoundView
 from .models.views import BoardView
 
 DASH = "—"
@@ -71,3 +72,40 @@ def when(moment: datetime | None) -> str:
     moment = moment.astimezone(UTC)
     pattern = "%Y-%m-%d %H:%M UTC" if moment.second == 0 else "%Y-%m-%d %H:%M:%S UTC"
     return moment.strftime(pattern)
+
+
+# ---- seasons ---------------------------------------------------------------------------------
+
+
+def points_rule(points: PointsTable, best_of: int | None, rounds: list[RoundView]) -> str:
+    """The points table, what counts and the rounds' weights, in one line."""
+    if points.scheme == "percentile":
+        parts = [f"Points by place in each round's field: {points.percentile_max} to the winner, "
+                 "down to 1"]
+    else:
+        listed = "-".join(str(p) for p in points.positions)
+        parts = [f"Points {listed} for places 1 to {len(points.positions)}"]
+    if points.participation:
+        parts[0] += f", and {points.participation} for taking part"
+    if best_of is None:
+        parts.append("every round counts")
+    elif best_of < len(rounds):
+        parts.append(f"the best {best_of} of {len(rounds)} rounds count")
+    else:
+        parts.append(f"each racer's best {best_of} rounds count")
+    for r in rounds:
+        said = ([f"counts ×{r.weight:g}"] if r.weight != 1 else []) + (
+            ["always counts"] if r.always_counts else [])
+        if said:
+            parts.append(f"R{r.number} " + " and ".join(said))
+    return " · ".join(parts) + "."
+
+
+def ordinal(rank: int) -> str:
+    """``1`` -> ``1st``, ``12`` -> ``12th``, ``22`` -> ``22nd``."""
+    suffix = "th" if 10 <= rank % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(rank % 10, "th")
+    return f"{rank}{suffix}"
+
+
+def points_text(points: float) -> str:
+    return f"{points:g}"

@@ -33,6 +33,7 @@ from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, algorithm_differences, design_facts, fact_text
 from .models.domain import BoardStatus, Design, TimingMethod
+from .models.seasons import SeasonLink
 from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
 if TYPE_CHECKING:
@@ -81,14 +82,14 @@ class Assets:
 
     @property
     def style_hash(self) -> str:
-        return _csp_hash(self.style)
+        return csp_hash(self.style)
 
     @property
     def script_hash(self) -> str:
-        return _csp_hash(self.script)
+        return csp_hash(self.script)
 
 
-def _csp_hash(text: str) -> str:
+def csp_hash(text: str) -> str:
     return "sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode()
 
 
@@ -133,6 +134,10 @@ def board_path(board_id: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/view"
 
 
+def season_path(season_id: str) -> str:
+    return "/seasons/" + quote(season_id, safe="") + "/view"
+
+
 def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
 
@@ -174,9 +179,10 @@ def index_page(boards: Iterable[BoardView]) -> str:
 
 def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: datetime,
                url: str = "", endpoint: str = "", qr_svg: str = "",
-               join_code: str | None = None) -> str:
-    """``/boards/{board}/view``: the board's status, window and rules, how to join and push,
-    and the standings with gaps to the leader and each model's design. ``screen`` is the
+               join_code: str | None = None, seasons: Sequence[SeasonLink] = ()) -> str:
+    """``/boards/{board}/view``: the board's status, window and rules, the seasons it counts
+    for (and whose final it is), how to join and push, and the standings with gaps to the
+    leader and each model's design. ``screen`` is the
     big-screen mode: sized for a room, one line a racer, the join code and a QR code
     (``qr_svg``, of ``url``), auto-scrolling."""
     board = page.board
@@ -204,7 +210,9 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
         laps_path=laps_path(board.board_id) if _laps_shown(board) else None,
         compare_top_path=(compare_path(board.board_id, [q.racer for q in qualified[:2]])
                           if len(qualified) >= 2 and not screen else None),
-        screen_path=board_path(board.board_id) + "?screen=1")
+        screen_path=board_path(board.board_id) + "?screen=1",
+        seasons=[{"path": season_path(link.season_id), "title": link.title, "final": link.final}
+                 for link in seasons])
 
 
 def waiting_page(board_id: str, screen: bool = False, *, join_code: str | None = None,

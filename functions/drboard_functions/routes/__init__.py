@@ -10,6 +10,7 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   ``admin_router`` (:mod:`.organisers`): the organisers' routes (create, change, close, delete,
   restore, export and import boards, moderation, audit), every one IAM-signed in the cloud and
   answered by ``drboard serve`` only to the computer it runs on.
+- :mod:`.seasons`: the seasons' reads and page (pull) and their organisers' routes (admin).
 - :mod:`.params` holds what the routes share: the routers, the request parameters, who is
   calling, and each JSON body's bound; :mod:`.responses` what they answer.
 - The routes never build a service: the caller puts one in the resolver's context before each
@@ -20,7 +21,16 @@ Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerat
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
 """
 
-from . import boards, cards, organisers, pages, results, submissions, webhooks  # noqa: F401 - each registers its routes
+from . import (  # noqa: F401 - each registers its routes
+    boards,
+    cards,
+    organisers,
+    pages,
+    results,
+    seasons,
+    submissions,
+    webhooks,
+)
 from .app import (
     COGNITO_PREFIX,
     ERROR_STATUS,

@@ -60,6 +60,7 @@ from .base import (
     read_page_token,
     stored_record,
 )
+from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
@@ -161,7 +162,7 @@ BUSY_TIMEOUT_S = 30.0
 BUSY_RETRY_AFTER_S = 1
 
 
-class SqliteStore:
+class SqliteStore(SqliteSeasons):
     """One SQLite connection per thread that uses the store (WAL: readers run alongside the one
     writer; writers take turns through BEGIN IMMEDIATE). ``:memory:`` is one database per
     connection, so that board keeps a single connection for every thread."""
@@ -177,7 +178,7 @@ class SqliteStore:
         self._enable_wal()
         with self._write():
             counted = self._has_table("rank_counts")
-            for statement in filter(str.strip, SCHEMA.split(";")):
+            for statement in filter(str.strip, (SCHEMA + SEASON_SCHEMA).split(";")):
                 self._db.execute(statement)
             if not counted:  # a board file from before the rank counts
                 self._count_every_board()
