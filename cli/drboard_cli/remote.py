@@ -27,7 +27,7 @@ from drboard_assembler.record import Record
 from drboard_functions import errors
 from drboard_functions.laps import LAP_COLUMNS
 from drboard_functions.models.domain import MAX_PAGE, Board
-from drboard_functions.models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
+from drboard_functions.models.notices import Delivery, TargetKind, WebhookList, WebhookSpec, WebhookView
 from drboard_functions.models.requests import (
     AliasAssignment,
     AliasRequest,
@@ -289,19 +289,22 @@ class HttpBoard:
         answer = self._call("GET", "/aliases/audit", query={"cursor": cursor, "limit": str(limit)},
                             signed=True)
         return _parse(AuditPage, answer)
-    def add_webhook(self, board_id: str, spec: WebhookSpec) -> WebhookView:
-        answer = self._call("POST", f"/boards/{_quote(board_id)}/webhooks", body=spec, signed=True)
+
+    # A board's webhooks, or a season's (``kind="season"``).
+
+    def add_webhook(self, target_id: str, spec: WebhookSpec, *, kind: TargetKind = "board") -> WebhookView:
+        answer = self._call("POST", _webhooks_path(kind, target_id), body=spec, signed=True)
         return _parse(WebhookView, answer)
 
-    def webhooks(self, board_id: str) -> WebhookList:
-        return _parse(WebhookList, self._call("GET", f"/boards/{_quote(board_id)}/webhooks", signed=True))
+    def webhooks(self, target_id: str, *, kind: TargetKind = "board") -> WebhookList:
+        return _parse(WebhookList, self._call("GET", _webhooks_path(kind, target_id), signed=True))
 
-    def remove_webhook(self, board_id: str, webhook_id: str) -> WebhookView:
-        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}"
+    def remove_webhook(self, target_id: str, webhook_id: str, *, kind: TargetKind = "board") -> WebhookView:
+        path = _webhooks_path(kind, target_id) + f"/{_quote(webhook_id)}"
         return _parse(WebhookView, self._call("DELETE", path, signed=True))
 
-    def test_webhook(self, board_id: str, webhook_id: str) -> Delivery:
-        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}/test"
+    def test_webhook(self, target_id: str, webhook_id: str, *, kind: TargetKind = "board") -> Delivery:
+        path = _webhooks_path(kind, target_id) + f"/{_quote(webhook_id)}/test"
         return _parse(Delivery, self._call("POST", path, signed=True))
 
     # ---- HTTP ---------------------------------------------------------------------------
@@ -354,6 +357,10 @@ class HttpBoard:
 
 def _quote(part: str) -> str:
     return urllib.parse.quote(part, safe="")
+
+
+def _webhooks_path(kind: TargetKind, target_id: str) -> str:
+    return f"/{'seasons' if kind == 'season' else 'boards'}/{_quote(target_id)}/webhooks"
 
 
 _NEXT_LINK = re.compile(r'<([^>]*)>\s*;\s*rel="?next"?')

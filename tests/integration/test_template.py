@@ -100,7 +100,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 33, "the push, /me, /me/alias, 22 organiser routes, 8 of seasons"
+    assert len(signed) == 37, "the push, /me, /me/alias, 22 organiser routes, 12 of seasons"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()

@@ -323,3 +323,12 @@ def _validated(model: type[Any], fields: dict[str, Any]) -> Any:
             message = f"{problem['input']!r} is not an id: {board_options.BOARD_ID_RULE}"
         hint = _OPTION_OF_FIELD.get(field, "--points" if field == "points" else field)
         raise click.BadParameter(message, param_hint=f"'{hint}'") from None
+
+
+def _add_webhook_commands() -> None:
+    from .webhooks import season_webhook_group
+
+    season_group.add_command(season_webhook_group)
+
+
+_add_webhook_commands()
