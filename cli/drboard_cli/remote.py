@@ -149,6 +149,10 @@ class HttpBoard:
         path = f"/boards/{_quote(board_id)}/racers/{_quote(racer)}/card.{kind}"
         return bytes(self._call("GET", path, binary=True).body)
 
+    def season_card(self, season_id: str, kind: Literal["png", "svg"]) -> bytes:
+        """The season's podium card, as the board draws it."""
+        return bytes(self._call("GET", f"/seasons/{_quote(season_id)}/card.{kind}", binary=True).body)
+
     # ---- organisers (always signed) -------------------------------------------------------
 
     def create_board(self, spec: BoardSpec) -> BoardView:

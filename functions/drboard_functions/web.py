@@ -142,6 +142,16 @@ def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
 
 
+def season_card_path(season_id: str, kind: str = "png") -> str:
+    """A season's podium card (``png`` or ``svg``), served by the card routes."""
+    return "/seasons/" + quote(season_id, safe="") + f"/card.{kind}"
+
+
+def podium_path(season_id: str) -> str:
+    """A season's podium page: its card and the certificates of its first three, to print."""
+    return "/seasons/" + quote(season_id, safe="") + "/podium/view"
+
+
 def racer_card_path(board_id: str, racer: str, kind: str = "png") -> str:
     """A racer's result card (``png`` or ``svg``), served by the card routes."""
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + f"/card.{kind}"

@@ -183,7 +183,8 @@ def test_racer_svg_escapes_what_racers_write() -> None:
     assert {"a & b", "<script>x</script>", 'm"1'} <= set(texts(svg))
 
 
-def test_drboard_card_saves_the_racers_card_from_the_embedded_board(tmp_path: Path) -> None:
+def test_drboard_card_saves_the_racers_card_from_the_embedded_board(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from click.testing import CliRunner
     from drboard_cli.main import cli
 
@@ -191,14 +192,110 @@ def test_drboard_card_saves_the_racers_card_from_the_embedded_board(tmp_path: Pa
     store = SqliteStore(db)
     LeaderboardService(store).push(make_record("Ada", [(9120, 100)], model="ada-v7"))
     store.close()
+    monkeypatch.chdir(tmp_path)
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path):
-        saved = runner.invoke(cli, ["--db", str(db), "card", "Ada", "--track", "reInvent2019"])
-        assert saved.exit_code == 0, saved.output
-        assert png_size(Path("Ada-reInvent2019_track.png").read_bytes()) == (1200, 630)
-        source = runner.invoke(cli, ["--db", str(db), "card", "Ada", "--track", "reInvent2019",
-                                     "--format", "svg", "-o", "ada.svg"])
-        assert source.exit_code == 0, source.output
-        assert {"Ada", "ada-v7", "9.120 s", "#1"} <= set(texts(Path("ada.svg").read_text("utf-8")))
-        missing = runner.invoke(cli, ["--db", str(db), "card", "Nobody", "--track", "reInvent2019"])
-        assert missing.exit_code == 1 and "Nobody" in missing.output
+    saved = runner.invoke(cli, ["--db", str(db), "card", "Ada", "--track", "reInvent2019"])
+    assert saved.exit_code == 0, saved.output
+    assert png_size((tmp_path / "Ada-reInvent2019_track.png").read_bytes()) == (1200, 630)
+    source = runner.invoke(cli, ["--db", str(db), "card", "Ada", "--track", "reInvent2019",
+                                 "--format", "svg", "-o", "ada.svg"])
+    assert source.exit_code == 0, source.output
+    assert {"Ada", "ada-v7", "9.120 s", "#1"} <= set(texts((tmp_path / "ada.svg").read_text("utf-8")))
+    missing = runner.invoke(cli, ["--db", str(db), "card", "Nobody", "--track", "reInvent2019"])
+    assert missing.exit_code == 1 and "Nobody" in missing.output
+
+
+def test_drboard_season_card_saves_the_podium_card(tmp_path: Path,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    from click.testing import CliRunner
+    from drboard_cli.main import cli
+
+    db = tmp_path / "season.db"
+    store = SqliteStore(db)
+    local = LeaderboardService(store)
+    from drboard_functions.models.seasons import SeasonSpec
+
+    local.create_board(BoardSpec(board_id="night", title="Night", track="reInvent2019"))
+    local.push(make_record("Ada", [(9120, 100)], model="ada-v7"), "night")
+    local.create_season(SeasonSpec(season_id="club", title="Club season"))
+    local.add_round("club", "night")
+    store.close()
+    monkeypatch.chdir(tmp_path)
+    saved = CliRunner().invoke(cli, ["--db", str(db), "season", "card", "club"])
+    assert saved.exit_code == 0, saved.output
+    assert png_size((tmp_path / "club-podium.png").read_bytes()) == (1200, 630)
+
+
+# ---- a season's podium: the card, the page's meta, the certificates ------------------------------
+
+
+@pytest.fixture
+def season(service: LeaderboardService) -> LeaderboardService:
+    from drboard_functions.models.seasons import SeasonSpec
+
+    service.create_board(BoardSpec(board_id="second-night", title="Second night", track="reInvent2019"))
+    service.push(make_record("Ada", [(8800, 100)], model="ada-v8"), "second-night")
+    service.push(make_record("Indy", [(9300, 100)], model="indy"), "second-night")
+    service.create_season(SeasonSpec(season_id="club-2027", title="Club season 2027"))
+    service.add_round("club-2027", "club-night")
+    service.add_round("club-2027", "second-night")
+    service.close_board("club-night")
+    return service
+
+
+def test_a_seasons_podium_card_says_its_first_three_with_points_wins_and_gaps(
+        season: LeaderboardService, client: Client) -> None:
+    answer = client.get("/seasons/club-2027/card.svg")
+    assert answer["statusCode"] == 200, answer["body"]
+    lines = texts(str(answer["body"]))
+    # Ada: 18 + 25 = 43, Blaze: 25 + 0 = 25, Indy: 15 + 18 = 33 (the league's points)
+    assert lines[:2] == ["Club season 2027", "Season podium · 2 of 2 rounds with results"]
+    assert {"1", "Ada", "43 pts", "1 win · 2 rounds raced"} <= set(lines)
+    assert {"2", "Indy", "33 pts", "−10 pts", "best finish 2nd · 2 rounds raced"} <= set(lines)
+    assert {"3", "Blaze", "25 pts", "−18 pts", "1 win · 1 round raced"} <= set(lines)
+    png = client.get("/seasons/club-2027/card.png")
+    assert png_size(base64.b64decode(str(png["body"]))) == (1200, 630)
+    assert client.get("/seasons/nowhere/card.png")["statusCode"] == 404
+
+
+def test_a_season_with_no_points_yet_still_has_a_card(service: LeaderboardService, client: Client) -> None:
+    from drboard_functions.models.seasons import SeasonSpec
+
+    service.create_season(SeasonSpec(season_id="empty", title="Empty season"))
+    lines = texts(str(client.get("/seasons/empty/card.svg")["body"]))
+    assert "No points yet: the podium comes with the first round's results." in lines
+
+
+def meta_of(page: str) -> dict[str, str]:
+    return {name: html.unescape(value) for name, value in
+            re.findall(r'<meta (?:property|name)="([^"]+)" content="([^"]*)"', page)}
+
+
+def test_the_season_page_and_its_podium_page_name_the_podium_card(season: LeaderboardService,
+                                                                  client: Client) -> None:
+    headers = {"host": "abc123.execute-api.eu-west-1.amazonaws.com", "x-forwarded-proto": "https"}
+    origin = "https://abc123.execute-api.eu-west-1.amazonaws.com"
+    for path in ("/seasons/club-2027/view", "/seasons/club-2027/podium/view"):
+        page = client.request("GET", path, headers=headers)
+        assert page["statusCode"] == 200, page["body"]
+        meta = meta_of(page["body"])
+        assert meta["og:image"] == meta["twitter:image"] == origin + "/seasons/club-2027/card.png"
+        assert (meta["og:image:width"], meta["og:image:height"]) == ("1200", "630")
+        assert meta["twitter:card"] == "summary_large_image"
+        assert meta["og:url"] == origin + path
+        assert meta["og:title"] == "Club season 2027: standings"
+        assert meta["og:description"] == "1st Ada (43 pts), 2nd Indy (33 pts), 3rd Blaze (25 pts) · 2 rounds."
+    assert '<a href="/seasons/club-2027/podium/view">Podium and certificates</a>' in client.request(
+        "GET", "/seasons/club-2027/view", headers=headers)["body"]
+
+
+def test_the_podium_page_has_a_certificate_for_each_of_the_first_three(season: LeaderboardService,
+                                                                       client: Client) -> None:
+    season.close_season("club-2027")
+    page = client.get("/seasons/club-2027/podium/view")["body"]
+    certificates = re.findall(r'<article class="certificate (\w+)" aria-label="Certificate: ([^"]+)">', page)
+    assert certificates == [("gold", "First place, Ada"), ("silver", "Second place, Indy"),
+                            ("bronze", "Third place, Blaze")]
+    assert '<p class="result">43 points</p>' in page and "in Club season 2027" in page
+    assert meta_of(page)["og:title"] == "Club season 2027: final standings"
+    assert client.get("/seasons/nowhere/podium/view")["statusCode"] == 404

@@ -93,6 +93,9 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("POST", "/boards/{board}/webhooks/{webhook}/test"),
         ("GET", "/boards/{board}/racers/{racer}/card.svg"),
         ("GET", "/boards/{board}/racers/{racer}/card.png"),
+        ("GET", "/seasons/{season}/card.svg"),
+        ("GET", "/seasons/{season}/card.png"),
+        ("GET", "/seasons/{season}/podium/view"),
     }
 
 

@@ -264,11 +264,11 @@ def card(ctx: Context, racer: str, track: str | None, board: str | None, fmt: st
     with edge():
         board_id = _board_id(track, board)
         data = ctx.board.racer_card(board_id, racer, "svg" if fmt == "svg" else "png")
-        path = output or Path(_file_name(f"{racer}-{board_id}") + f".{fmt}")
+        path = output or Path(file_name(f"{racer}-{board_id}") + f".{fmt}")
         path.write_bytes(data)
         out().print(f"Saved {racer}'s card on {board_id} to {path}")
 
 
-def _file_name(name: str) -> str:
+def file_name(name: str) -> str:
     """A file name anyone's system takes: letters, digits, ``-``, ``_`` and ``.`` only."""
     return "".join(char if char.isalnum() or char in "-_." else "_" for char in name).strip(".") or "card"

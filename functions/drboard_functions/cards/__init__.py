@@ -13,8 +13,8 @@ The CardFunction serves the card routes in the cloud (resvg and the fonts ship w
 `drboard serve` and the embedded board draw the same cards, resvg being a CLI dependency.
 """
 
-from .content import Podium, PodiumPlace, RacerCard, racer_card
+from .content import Podium, PodiumPlace, RacerCard, racer_card, season_podium
 from .svg import HEIGHT, WIDTH, podium_svg, racer_svg
 
 __all__ = ["HEIGHT", "WIDTH", "Podium", "PodiumPlace", "RacerCard", "podium_svg", "racer_card",
-           "racer_svg"]
+           "racer_svg", "season_podium"]

@@ -95,6 +95,9 @@ def podium_svg(podium: Podium) -> str:
         if place.gap:
             texts.append(text(place.gap, WIDTH - MARGIN, middle + 40, box=260, size=24,
                               colour="muted", anchor="end"))
+    if not podium.places:
+        texts.append(text("No points yet: the podium comes with the first round's results.",
+                          MARGIN, 300, box=WIDTH - 2 * MARGIN, size=34, least=20, colour="muted"))
     names = ", ".join(f"{p.rank}. {p.name}" for p in podium.places[:3])
     return _render("podium.svg", texts, podium.date, badges=badges,
                    title=f"{podium.title}: {names or 'no one yet'}")

@@ -1,5 +1,6 @@
 """The result cards, on the card router (public; the CardFunction's in the cloud): a racer's
-result as SVG and as PNG, at stable addresses the pages name in their Open Graph meta.
+result, and a season's podium, as SVG and as PNG, at stable addresses the pages name in their
+Open Graph meta.
 
 A card answers with an ``ETag`` of its SVG (the PNG is drawn from it), so a client that holds
 the card as it stands is answered ``304`` before anything is drawn. The cards and their renderer
@@ -16,6 +17,7 @@ from aws_lambda_powertools.event_handler import Response
 
 from .params import BoardId, IfNoneMatch, RacerAlias, Service, card_router, segment
 from .responses import BAD_PATH, api_version, error_response
+from .seasons import SeasonId
 
 SVG = "image/svg+xml"
 PNG = "image/png"
@@ -52,9 +54,9 @@ def card_answer(svg: str, kind: str, if_none_match: str | None) -> Response[str]
     return answer
 
 
-def _responses(kind: str) -> Any:
+def _responses(kind: str, missing: str = _NOT_FOUND) -> Any:
     return {200: card_response(kind), 304: {"description": "The client holds this card already."},
-            400: error_response(BAD_PATH), 404: error_response(_NOT_FOUND)}
+            400: error_response(BAD_PATH), 404: error_response(missing)}
 
 
 @card_router.get(
@@ -81,3 +83,27 @@ def racer_card_svg(board: BoardId, racer: RacerAlias, service: Service,
 def racer_card_png(board: BoardId, racer: RacerAlias, service: Service,
                    if_none_match: IfNoneMatch = None) -> Response[str]:
     return card_answer(service.racer_card_svg(segment(board), segment(racer)), "png", if_none_match)
+
+
+@card_router.get(
+    "/seasons/<season>/card.svg",
+    summary="A season's podium card, as SVG",
+    description="The season's first three: their points, wins, rounds raced and gap to the "
+                "leader, 1200×630: the source the PNG is drawn from.",
+    tags=["cards"],
+    responses=_responses("svg", "No such season."),
+)
+def season_card_svg(season: SeasonId, service: Service, if_none_match: IfNoneMatch = None) -> Response[str]:
+    return card_answer(service.season_card_svg(segment(season)), "svg", if_none_match)
+
+
+@card_router.get(
+    "/seasons/<season>/card.png",
+    summary="A season's podium card, as PNG",
+    description="The SVG card drawn as a 1200×630 PNG: what the season page's and its podium "
+                "page's `og:image` name.",
+    tags=["cards"],
+    responses=_responses("png", "No such season."),
+)
+def season_card_png(season: SeasonId, service: Service, if_none_match: IfNoneMatch = None) -> Response[str]:
+    return card_answer(service.season_card_svg(segment(season)), "png", if_none_match)

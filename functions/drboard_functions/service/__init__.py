@@ -83,7 +83,7 @@ class LeaderboardService:
         self._aliases = Aliases(keeper)
         self._results = Results(keeper)
         self._webhooks = Webhooks(keeper)
-        self._sharing = Sharing(self._reading)
+        self._sharing = Sharing(self._reading, self._seasons, clock)
         self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
@@ -140,6 +140,8 @@ class LeaderboardService:
 
     racer_card_svg = _handed_to("_sharing", Sharing.racer_card_svg)
     racer_card = _handed_to("_sharing", Sharing.racer_card)
+    season_card_svg = _handed_to("_sharing", Sharing.season_card_svg)
+    season_card = _handed_to("_sharing", Sharing.season_card)
 
     add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
     webhooks = _handed_to("_webhooks", Webhooks.webhooks)

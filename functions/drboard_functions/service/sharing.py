@@ -7,14 +7,18 @@ from __future__ import annotations
 
 from typing import Literal
 
+from .boards import Clock
 from .reading import Reading
+from .seasons import Seasons
 
 CardKind = Literal["png", "svg"]
 
 
 class Sharing:
-    def __init__(self, reading: Reading) -> None:
+    def __init__(self, reading: Reading, seasons: Seasons, clock: Clock) -> None:
         self.reading = reading
+        self.seasons = seasons
+        self.clock = clock
 
     def racer_card_svg(self, board_id: str, racer: str) -> str:
         """The racer's result card on the board, as SVG: the board, their rank of how many,
@@ -30,9 +34,22 @@ class Sharing:
 
     def racer_card(self, board_id: str, racer: str, kind: CardKind = "png") -> bytes:
         """The racer's card as a file: the PNG (1200×630), or its SVG source."""
-        svg = self.racer_card_svg(board_id, racer)
-        if kind == "svg":
-            return svg.encode("utf-8")
-        from ..cards.png import render
+        return _file(self.racer_card_svg(board_id, racer), kind)
 
-        return render(svg)
+    def season_card_svg(self, season_id: str) -> str:
+        """The season's podium card, as SVG: its first three, their points, wins and gaps."""
+        from .. import cards
+
+        return cards.podium_svg(cards.season_podium(self.seasons.season(season_id), self.clock()))
+
+    def season_card(self, season_id: str, kind: CardKind = "png") -> bytes:
+        """The season's podium card as a file: the PNG, or its SVG source."""
+        return _file(self.season_card_svg(season_id), kind)
+
+
+def _file(svg: str, kind: CardKind) -> bytes:
+    if kind == "svg":
+        return svg.encode("utf-8")
+    from ..cards.png import render
+
+    return render(svg)
