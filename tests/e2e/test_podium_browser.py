@@ -39,6 +39,7 @@ def test_the_podium_prints_one_certificate_to_an_a4_landscape_page(season: Serve
         assert names.nth(index).evaluate("el => el.scrollWidth <= el.clientWidth + 1")
     assert certificates.first.evaluate("el => getComputedStyle(el).breakAfter") == "page"
     shot(page, "podium-print")
+    certificates.first.screenshot(path=str(ARTIFACTS / "podium-certificate-print.png"))
     pdf = page.pdf(prefer_css_page_size=True, print_background=True)
     ARTIFACTS.mkdir(exist_ok=True)
     (ARTIFACTS / "podium-certificates.pdf").write_bytes(pdf)
