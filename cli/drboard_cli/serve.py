@@ -184,7 +184,14 @@ class BoardServer:
 
     def __init__(self, address: tuple[str, int], service: LeaderboardService,
                  desk: JoinDesk | None = None, *, log_requests: bool = False) -> None:
-        from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
+        from drboard_functions.routes import (
+            ADMIN_TAG,
+            admin_router,
+            build_app,
+            card_router,
+            pull_router,
+            push_router,
+        )
 
         self.service = service
         self.desk = desk
@@ -197,8 +204,8 @@ class BoardServer:
         # of those is answered 403 rather than 404.
         self.resolvers: queue.SimpleQueue[_Resolvers] = queue.SimpleQueue()
         for _ in range(RESOLVER_THREADS):
-            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, admin_router),
-                                          build_app(push_router, pull_router)))
+            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, card_router, admin_router),
+                                          build_app(push_router, pull_router, card_router)))
         self.organiser_routes = RouteMatcher(tagged_routes(build_app(admin_router), ADMIN_TAG))
         self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
         self.open_streams = 0

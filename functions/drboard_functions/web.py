@@ -59,6 +59,22 @@ class Invite:
 
 
 @dataclass(frozen=True)
+class Share:
+    """What a page's Open Graph and Twitter meta say, so that a link to it pasted in a chat
+    unfurls as its result card: absolute URLs (a link preview knows no page to resolve against)."""
+
+    title: str
+    description: str
+    url: str  # the page's own
+    image: str  # the card's PNG
+    alt: str
+    card_path: str  # the card's PNG, on this origin (the page shows it)
+    svg_path: str
+    width: int = 1200
+    height: int = 630
+
+
+@dataclass(frozen=True)
 class Assets:
     """The style sheet and the script every page inlines, and their CSP hashes."""
 
@@ -106,9 +122,9 @@ def environment() -> Environment:
 
 
 def _render(template: str, *, title: str, heading: str, subtitle: str, live: dict[str, Any] | None = None,
-            screen: bool = False, **context: Any) -> str:
+            screen: bool = False, share: Share | None = None, **context: Any) -> str:
     return environment().get_template(template).render(
-        title=title, heading=heading, subtitle=subtitle, live=live, screen=screen,
+        title=title, heading=heading, subtitle=subtitle, live=live, screen=screen, share=share,
         refresh_s=REFRESH_S, assets=assets(), **context)
 
 
@@ -127,6 +143,21 @@ def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
 
 
+def season_card_path(season_id: str, kind: str = "png") -> str:
+    """A season's podium card (``png`` or ``svg``), served by the card routes."""
+    return "/seasons/" + quote(season_id, safe="") + f"/card.{kind}"
+
+
+def podium_path(season_id: str) -> str:
+    """A season's podium page: its card and the certificates of its first three, to print."""
+    return "/seasons/" + quote(season_id, safe="") + "/podium/view"
+
+
+def racer_card_path(board_id: str, racer: str, kind: str = "png") -> str:
+    """A racer's result card (``png`` or ``svg``), served by the card routes."""
+    return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + f"/card.{kind}"
+
+
 def compare_path(board_id: str, racers: Sequence[str]) -> str:
     return ("/boards/" + quote(board_id, safe="") + "/compare/view?"
             + urlencode([("racer", racer) for racer in racers]))
@@ -134,6 +165,11 @@ def compare_path(board_id: str, racers: Sequence[str]) -> str:
 
 def _insights_path(board_id: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/insights/view"
+
+
+def laps_path(board_id: str) -> str:
+    """Every lap of the board's submissions, as CSV (``drboard export --laps`` reads it too)."""
+    return "/boards/" + quote(board_id, safe="") + "/laps.csv"
 
 
 def design_summary(design: Design | None) -> str:
@@ -183,6 +219,7 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
         push_command=_push_command(board, endpoint, joined=join is not None), entries=entries,
         time_label=_time_label(board), best_lap_column=board.method != TimingMethod.BEST_LAP_TIME,
         next_path=next_path, insights_path=_insights_path(board.board_id),
+        laps_path=laps_path(board.board_id) if _laps_shown(board) else None,
         compare_top_path=(compare_path(board.board_id, [q.racer for q in qualified[:2]])
                           if len(qualified) >= 2 and not screen else None),
         screen_path=board_path(board.board_id) + "?screen=1",
@@ -208,13 +245,26 @@ def join_page(invite: Invite, boards: Iterable[BoardView]) -> str:
                    boards=[{"path": board_path(b.board_id), "title": b.title} for b in boards])
 
 
-def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None = None) -> str:
-    """``/boards/{board}/racers/{racer}/view``: the counted run's laps, the action space, the
-    hyperparameters, the training, the racer's submissions over time and any flags, and links
-    to compare with the leader and the racer just ahead."""
+def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None = None,
+               origin: str = "") -> str:
+    """``/boards/{board}/racers/{racer}/view``: the racer's result card (named in the page's
+    Open Graph meta, with ``origin`` for its absolute URLs), the counted run's laps, the action
+    space, the hyperparameters, the training, the racer's submissions over time and any flags,
+    and links to compare with the leader and the racer just ahead."""
     entry, record, board = view.entry, view.record, view.board
     standing = (f"#{entry.rank} on {board.title} · {seconds(entry.time_ms)}" if entry.qualified
                 else f"#{entry.rank} on {board.title} · {percent(entry.best_completion_pct)} done")
+    result = (f"{seconds(entry.time_ms)}, " + ("the leader" if entry.rank == 1 else
+                                              f"{gap(entry.gap_ms)} to the leader")
+              if entry.qualified else f"{percent(entry.best_completion_pct)} done")
+    card = racer_card_path(board.board_id, view.racer)
+    share = Share(
+        title=f"{view.racer}: #{entry.rank} of {board.participants} on {board.title}",
+        description=f"{result} with {entry.model_name} · {board.track_name}, {method_label(board)}.",
+        url=origin + racer_path(board.board_id, view.racer), image=origin + card,
+        alt=f"Result card: {view.racer}, #{entry.rank} on {board.title}, {result}, model "
+            f"{entry.model_name}",
+        card_path=card, svg_path=racer_card_path(board.board_id, view.racer, "svg"))
     links: list[dict[str, str]] = []
     for other, text in ((leader, "Compare with the leader, {}"), (ahead, "Compare with {}, just ahead")):
         if other and other != view.racer and all(other not in link["text"] for link in links):
@@ -232,6 +282,7 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
         "private": PRIVATE_DESIGN if record is None else None,
     }
     title = f"{view.racer} · {board.title} · drboard"
+    context["share"] = share
     if record is None:
         return _render("racer.html", title=title, heading=view.racer,
                        subtitle=f"{standing} · {entry.model_name}", **context)
@@ -410,6 +461,12 @@ def _race(board: BoardView) -> str:
 
 def _open(board: BoardView) -> bool:
     return board.status != BoardStatus.CLOSED
+
+
+def _laps_shown(board: BoardView) -> bool:
+    """Whether the board's laps may be downloaded: they show with the designs (a board that
+    keeps its designs private until it closes keeps its laps too)."""
+    return board.participants > 0 and (board.designs == "public" or board.status == BoardStatus.CLOSED)
 
 
 def _time_label(board: BoardView) -> str:

@@ -1,4 +1,5 @@
-"""The commands that read a board: pull, boards, compare, insights, history, show and status."""
+"""The commands that read a board: pull, boards, compare, insights, history, show, status and
+card."""
 
 from __future__ import annotations
 
@@ -275,3 +276,33 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
             click.echo(render.json_text(summary.model_dump_json(indent=2)))
         else:
             out().print(render.status_table(summary, out().width))
+
+
+@click.command()
+@click.argument("racer")
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@click.option("--format", "fmt", type=click.Choice(["png", "svg"]), default="png", show_default=True,
+              help="png to share, or svg, the source the PNG is drawn from.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Where to save it (default: RACER-BOARD.png in this folder).")
+@pass_context
+def card(ctx: Context, racer: str, track: str | None, board: str | None, fmt: str,
+         output: Path | None) -> None:
+    """Save a racer's result card, a PNG to share (or its SVG source).
+
+    The card (1200×630) says the board, the racer's rank of how many, their time, the gap to the
+    leader and their model: the image a link to the racer's page unfurls as in a chat. The
+    embedded board draws it here; a deployed board or a `drboard serve` answers its own.
+    """
+    with edge():
+        board_id = _board_id(track, board)
+        data = ctx.board.racer_card(board_id, racer, "svg" if fmt == "svg" else "png")
+        path = output or Path(file_name(f"{racer}-{board_id}") + f".{fmt}")
+        path.write_bytes(data)
+        out().print(f"Saved {racer}'s card on {board_id} to {path}")
+
+
+def file_name(name: str) -> str:
+    """A file name anyone's system takes: letters, digits, ``-``, ``_`` and ``.`` only."""
+    return "".join(char if char.isalnum() or char in "-_." else "_" for char in name).strip(".") or "card"
