@@ -189,7 +189,8 @@ COMMANDS: dict[str, LazyCommand] = {
           ("history", "history", "A racer's submissions on every board, oldest first."),
           ("show", "show", "How a racer's best model was built: hyperparameters, action space, "
                            "laps, training."),
-          ("status", "status", "Where a racer stands on each board they pushed to.")),
+          ("status", "status", "Where a racer stands on each board they pushed to."),
+          ("card", "card", "Save a racer's result card, a PNG to share (or its SVG source).")),
     **_at("organisers",
           ("board", "board_group", "Organisers: create, update, close, delete and restore named "
                                    "boards, and moderate any board."),

@@ -187,7 +187,14 @@ class BoardServer:
 
     def __init__(self, address: tuple[str, int], service: LeaderboardService,
                  desk: JoinDesk | None = None, *, log_requests: bool = False) -> None:
-        from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
+        from drboard_functions.routes import (
+            ADMIN_TAG,
+            admin_router,
+            build_app,
+            card_router,
+            pull_router,
+            push_router,
+        )
 
         self.service = service
         self.desk = desk
@@ -200,8 +207,8 @@ class BoardServer:
         # of those is answered 403 rather than 404.
         self.resolvers: queue.SimpleQueue[_Resolvers] = queue.SimpleQueue()
         for _ in range(RESOLVER_THREADS):
-            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, admin_router),
-                                          build_app(push_router, pull_router)))
+            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, card_router, admin_router),
+                                          build_app(push_router, pull_router, card_router)))
         self.organiser_routes = RouteMatcher(tagged_routes(build_app(admin_router), ADMIN_TAG))
         self.standings = standings_of(service)
         # A board's version on the embedded board is one row of a local file: read on the

@@ -32,21 +32,30 @@ def percent(value: float) -> str:
     return f"{value:g} %"
 
 
-def algorithm_name(algorithm: str) -> str:
-    return _ALGORITHMS.get(algorithm, algorithm)
+def algorithm_name(algorithm: str | None) -> str:
+    return UNKNOWN if algorithm is None else _ALGORITHMS.get(algorithm, algorithm)
 
 
 PRIVATE_DESIGN = "private until the board closes"
+#: How a fact the run's files do not state reads.
+UNKNOWN = "unknown"
+UNKNOWN_DESIGN = "design unknown"
 
 
 def design_summary(design: Design | None, *, sensors: bool = False) -> str:
-    """``PPO, 14 actions, 2 m/s, ±30°`` (and the sensors, when asked)."""
+    """``PPO, 14 actions, 2 m/s, ±30°`` (and the sensors, when asked); what the run's files do
+    not state reads as unknown."""
     if design is None:
         return PRIVATE_DESIGN
-    space = f"{design.actions} actions" if design.actions else "continuous"
-    summary = (f"{algorithm_name(design.algorithm)}, {space}, {design.max_speed:g} m/s, "
-               f"±{design.max_steering:g}°")
-    listed = ", ".join(design.sensors)
+    if not design.known:
+        return UNKNOWN_DESIGN
+    if design.action_space is None or design.max_speed is None or design.max_steering is None:
+        summary = f"{algorithm_name(design.algorithm)}, action space unknown"
+    else:
+        space = f"{design.actions} actions" if design.actions else "continuous"
+        summary = (f"{algorithm_name(design.algorithm)}, {space}, {design.max_speed:g} m/s, "
+                   f"±{design.max_steering:g}°")
+    listed = ", ".join(design.sensors or [])
     return f"{summary}; {listed}" if sensors and listed else summary
 
 

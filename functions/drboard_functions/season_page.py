@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from datetime import datetime
 from functools import cache
 from importlib.resources import files
 from typing import Any
@@ -59,9 +60,10 @@ def _render(template: str, *, heading: str, subtitle: str, screen: bool = False,
 
 
 def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
-                url: str = "") -> Page:
+                url: str = "", origin: str = "") -> Page:
     """``/seasons/{season}/view``: the whole standings (up to a page of the API's), or on the
-    big screen the ``part``-th page of ``SCREEN_ROWS`` racers, with a QR code of ``url``."""
+    big screen the ``part``-th page of ``SCREEN_ROWS`` racers, with a QR code of ``url``. Its
+    Open Graph meta name the season's podium card (absolute URLs, on ``origin``)."""
     season = view.season
     rows = view.standings
     path = web.season_path(season.season_id)
@@ -97,10 +99,47 @@ def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
         rows=[_row(s) for s in rows],
         next_page=(path + "?" + urlencode({"cursor": view.next_cursor})
                    if view.next_cursor and not screen else None),
-        screen_path=path + "?screen=1",
+        screen_path=path + "?screen=1", podium_path=web.podium_path(season.season_id),
         qr={"svg": web.qr_svg(url), "url": url} if screen and url else None,
+        share=_share(view, origin, path),
     )
     return Page(html, _policy(script=next_screen is not None))
+
+
+def podium_page(view: SeasonStandings, *, origin: str, now: datetime) -> Page:
+    """``/seasons/{season}/podium/view``: the season's podium card, and a certificate for each
+    racer of its first three ranks, which print one to an A4 landscape page."""
+    from .cards.content import points, season_podium, standing_detail
+
+    season = view.season
+    podium = season_podium(view, now)
+    places = {1: "First place", 2: "Second place", 3: "Third place"}
+    medals = {1: "gold", 2: "silver", 3: "bronze"}
+    certificates = [{"rank": s.rank, "place": places[s.rank], "medal": medals[s.rank], "name": s.racer,
+                     "result": points(s.points, "point"),
+                     "detail": standing_detail(s) + (" · qualified for the final"
+                                                     if s.qualified_for_final else ""),
+                     "date": (season.closed_at or now).strftime("%Y-%m-%d")}
+                    for s in view.standings if s.rank in places]
+    path = web.podium_path(season.season_id)
+    html = _render("podium.html", heading=f"Podium · {season.title}", subtitle=podium.subtitle,
+                   certificates=certificates, season_title=season.title,
+                   season_path=web.season_path(season.season_id),
+                   share=_share(view, origin, path))
+    return Page(html, _policy(script=False))
+
+
+def _share(view: SeasonStandings, origin: str, path: str) -> web.Share:
+    """The Open Graph and Twitter meta of a season's pages: its podium card."""
+    season = view.season
+    top = [s for s in view.standings if s.rank <= 3]
+    said = ", ".join(f"{ordinal(s.rank)} {s.racer} ({points_text(s.points)} pts)" for s in top)
+    card = web.season_card_path(season.season_id)
+    return web.Share(
+        title=f"{season.title}: " + ("final standings" if season.status == "CLOSED" else "standings"),
+        description=(said or "No points yet") + f" · {_count(len(season.rounds), 'round')}.",
+        url=origin + path, image=origin + card, alt=f"Podium card of {season.title}: {said or 'no one yet'}",
+        card_path=card, svg_path=web.season_card_path(season.season_id, "svg"))
 
 
 def seasons_page(seasons: list[SeasonSummary]) -> Page:

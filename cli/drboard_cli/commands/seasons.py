@@ -265,6 +265,29 @@ def season_standings(ctx: Context, season_id: str, top: int, fmt: str, output: P
             click.echo(text, nl=False)
 
 
+@season_group.command(name="card")
+@click.argument("season_id", metavar="SEASON")
+@click.option("--format", "fmt", type=click.Choice(["png", "svg"]), default="png", show_default=True,
+              help="png to share, or svg, the source the PNG is drawn from.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Where to save it (default: SEASON-podium.png in this folder).")
+@pass_context
+def season_card(ctx: Context, season_id: str, fmt: str, output: Path | None) -> None:
+    """Save a season's podium card, a PNG to share (or its SVG source).
+
+    The card (1200×630) shows the first three, their points, wins and gaps to the leader: the
+    image a link to the season's page unfurls as in a chat. Its podium page,
+    /seasons/SEASON/podium/view, prints the certificates of the first three.
+    """
+    from .standings import file_name
+
+    with edge():
+        data = ctx.board.season_card(season_id, "svg" if fmt == "svg" else "png")
+        path = output or Path(file_name(f"{season_id}-podium") + f".{fmt}")
+        path.write_bytes(data)
+        out().print(f"Saved the podium card of {season_id} to {path}")
+
+
 def _collect(client: BoardClient, season_id: str, top: int) -> SeasonStandings:
     page = client.season(season_id, min(top, PAGE), None)
     rows = list(page.standings)
@@ -323,3 +346,12 @@ def _validated(model: type[Any], fields: dict[str, Any]) -> Any:
             message = f"{problem['input']!r} is not an id: {board_options.BOARD_ID_RULE}"
         hint = _OPTION_OF_FIELD.get(field, "--points" if field == "points" else field)
         raise click.BadParameter(message, param_hint=f"'{hint}'") from None
+
+
+def _add_webhook_commands() -> None:
+    from .webhooks import season_webhook_group
+
+    season_group.add_command(season_webhook_group)
+
+
+_add_webhook_commands()

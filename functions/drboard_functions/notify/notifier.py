@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 from ..models.notices import Announcement, Delivery, EntryChange, Webhook
 from ..stores.base import BoardStore
 from . import sending
-from .events import BoardUrl, entry_announcement, targets_of, window_announcements
+from .events import BoardUrl, entry_announcement, season_boards, targets_of, window_announcements
 from .messages import payload
 
 if TYPE_CHECKING:
@@ -58,10 +58,14 @@ class Notifier:
         return any(self.store.webhooks(target.key) for target in targets_of(board_id))
 
     def check_windows(self) -> list[str]:
-        """Announce the boards' openings and closings not yet announced; the failures."""
+        """Announce the openings and closings not yet announced of the boards that have
+        webhooks, or are rounds (or finals) of seasons that have; the failures."""
         now = self.clock()
         failures: list[str] = []
-        boards = {hook.target.target_id for hook in self.store.all_webhooks() if hook.target.kind == "board"}
+        boards: set[str] = set()
+        for target in {hook.target for hook in self.store.all_webhooks()}:
+            boards |= ({target.target_id} if target.kind == "board"
+                       else set(season_boards(self.store, target.target_id)))
         for board_id in sorted(boards):
             stored = self.store.get_board(board_id)
             if stored is None or stored.board.deleted_at is not None:
@@ -72,9 +76,12 @@ class Notifier:
 
     def announce(self, announcement: Announcement) -> list[str]:
         failures = []
-        for target in targets_of(announcement.board_id):
+        for target in targets_of(self.store, announcement.board_id):
             for webhook in self.store.webhooks(target.key):
-                if announcement.kind not in webhook.events or webhook.created_at > announcement.at:
+                # A webhook hears what happens from when it was added; the stream's times are
+                # whole seconds (rounded down), so from the second it was added.
+                if (announcement.kind not in webhook.events
+                        or webhook.created_at.replace(microsecond=0) > announcement.at):
                     continue
                 error = self._deliver(webhook, announcement)
                 if error:

@@ -3,6 +3,8 @@
 The three Lambda functions and ``drboard serve`` build their resolver with :func:`build_app`, so
 the routes, the validation, the error statuses and the OpenAPI document are the same everywhere.
 
+- ``card_router`` (:mod:`.cards`): the result cards (SVG, and PNG drawn from it), the
+  CardFunction's in the cloud, apart so that only it ships the renderer and its fonts.
 - ``push_router`` (:mod:`.submissions`): a racer's submission and alias (IAM-signed in the
   cloud). ``pull_router``: the public reads (:mod:`.boards`) and the web pages (:mod:`.pages`).
   ``admin_router`` (:mod:`.organisers`): the organisers' routes (create, change, close, delete,
@@ -21,6 +23,7 @@ OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the c
 
 from . import (  # noqa: F401 - each registers its routes
     boards,
+    cards,
     organisers,
     pages,
     results,
@@ -48,6 +51,7 @@ from .params import (
     RequestBody,
     admin_router,
     bounded_json,
+    card_router,
     pull_router,
     push_router,
 )
@@ -67,6 +71,7 @@ __all__ = [
     "bounded_json",
     "build_app",
     "canonical_event",
+    "card_router",
     "error_body",
     "error_headers",
     "openapi_document",

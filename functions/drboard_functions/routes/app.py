@@ -409,7 +409,7 @@ def build_app(*routers: Router) -> BoardResolver:
         description="Push a model's evaluation as a record; read the standings, each racer's "
                     "history and how the fast models were built. Reads are public; submissions "
                     "and the organisers' routes (tag `admin`) are signed with SigV4 (IAM).",
-        tags=["submissions", "boards", "racers", "seasons", ADMIN_TAG, "pages"],
+        tags=["submissions", "boards", "racers", "seasons", ADMIN_TAG, "pages", "results", "cards"],
         # Plain data, which Powertools validates as an APIKey when it builds the document: its
         # OpenAPI models cost a cold start ~40 ms to import, for a document the functions never
         # serve. (No servers: Powertools' default is the same single "/".)

@@ -108,7 +108,7 @@ def _origin(event: Any) -> str:
     tags=["pages"],
     responses={200: PAGE_RESPONSE, 404: error_response("No such board or racer.")},
 )
-def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[str]:
+def racer_view(board: BoardId, racer: RacerAlias, service: Service, request: Request) -> Response[str]:
     view = service.racer(segment(board), segment(racer), MAX_PAGE)
     leader = ahead = None
     if view.entry.rank > 1 and view.record is not None:
@@ -117,7 +117,8 @@ def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[
                                    cursor=None).entries
         leader = above[0].racer if above else None
         ahead = above[-1].racer if above and view.entry.rank - 1 <= MAX_PAGE else None
-    return page_answer(web.racer_page(view, leader=leader, ahead=ahead))
+    return page_answer(web.racer_page(view, leader=leader, ahead=ahead,
+                                      origin=_invite(request).endpoint))
 
 
 @pull_router.get(

@@ -111,8 +111,23 @@ def season_view(season: SeasonId, service: Service, request: Request, screen: Sc
                 part: Part = 1) -> Response[str]:
     season_id = segment(season)
     view = service.season(season_id, MAX_PAGE)
-    url = _invite(request).endpoint + web.season_path(season_id)  # the network's address on serve
-    page = season_page.season_page(view, screen=screen, part=part, url=url)
+    origin = _invite(request).endpoint  # the network's address on serve
+    page = season_page.season_page(view, screen=screen, part=part,
+                                   url=origin + web.season_path(season_id), origin=origin)
+    return page_answer(page.html, headers=_policy(page))
+
+
+@pull_router.get(
+    "/seasons/<season>/podium/view",
+    summary="A season's podium page: its card and the certificates to print",
+    description="The season's podium card, and a certificate for each racer of its first three "
+                "ranks (equal points share a rank), which print one to an A4 landscape page.",
+    tags=["pages"],
+    responses={200: PAGE_RESPONSE, 404: error_response(_NO_SEASON)},
+)
+def podium_view(season: SeasonId, service: Service, request: Request) -> Response[str]:
+    view = service.season(segment(season), MAX_PAGE)
+    page = season_page.podium_page(view, origin=_invite(request).endpoint, now=service.clock())
     return page_answer(page.html, headers=_policy(page))
 
 

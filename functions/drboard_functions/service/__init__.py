@@ -7,8 +7,8 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
 trail's reading), ``transfer`` (export, import and a board's recheck), ``aliases`` (the
 organisers' hand on racers' aliases), ``results`` (laps to analyse), ``webhooks`` (the chat's
-announcements) and ``seasons`` (boards added up into a season's standings, and its final);
-``copies`` holds the rules of copied runs.
+announcements), ``seasons`` (boards added up into a season's standings, and its final) and
+``sharing`` (result cards); ``copies`` holds the rules of copied runs.
 :class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
@@ -38,6 +38,7 @@ from .pushing import Pushing, check_record_size, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
 from .results import LAPS_PAGE, Results
 from .seasons import Seasons
+from .sharing import Sharing
 from .transfer import Transfer
 from .webhooks import Webhooks
 
@@ -82,6 +83,7 @@ class LeaderboardService:
         self._aliases = Aliases(keeper)
         self._results = Results(keeper)
         self._webhooks = Webhooks(keeper)
+        self._sharing = Sharing(self._reading, self._seasons, clock)
         self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
@@ -136,6 +138,11 @@ class LeaderboardService:
     board_seasons = _handed_to("_seasons", Seasons.board_seasons)
     laps_page = _handed_to("_results", Results.laps_page)
     run_laps = _handed_to("_results", Results.run_laps)
+
+    racer_card_svg = _handed_to("_sharing", Sharing.racer_card_svg)
+    racer_card = _handed_to("_sharing", Sharing.racer_card)
+    season_card_svg = _handed_to("_sharing", Sharing.season_card_svg)
+    season_card = _handed_to("_sharing", Sharing.season_card)
 
     add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
     webhooks = _handed_to("_webhooks", Webhooks.webhooks)
