@@ -55,7 +55,7 @@ class Notifier:
 
     def listened(self, board_id: str) -> bool:
         """Whether any webhook hears of the board (its own, or the event's)."""
-        return any(self.store.webhooks(target.key) for target in targets_of(board_id))
+        return any(self.store.webhooks(target.key) for target in targets_of(self.store, board_id))
 
     def check_windows(self) -> list[str]:
         """Announce the openings and closings not yet announced of the boards that have
