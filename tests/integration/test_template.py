@@ -335,6 +335,8 @@ def _environment(cloudformation: dict[str, Any], function: str, names: dict[str,
     variables = cloudformation["Resources"][function]["Properties"]["Environment"]["Variables"]
     resolved = {}
     for key, value in variables.items():
+        if isinstance(value, dict) and "Fn::If" in value:  # the parameters' defaults: no condition holds
+            value = value["Fn::If"][2]
         if isinstance(value, dict) and "Ref" in value:
             value = names.get(value["Ref"], value["Ref"])
         elif isinstance(value, dict) and isinstance(value.get("Fn::Sub"), str):
