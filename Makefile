@@ -36,26 +36,45 @@ PRECOMPILED = drboard_assembler drboard_functions segno regex disarm jinja2 mark
 	aws_lambda_powertools/utilities/jmespath_utils aws_lambda_powertools/utilities/typing
 NOT_PRECOMPILED = (^|/)pydantic/(v1/|experimental/|mypy\.py)
 
-build-PushFunction build-PullFunction build-AdminFunction build-NotifyFunction:
+# One recipe for every function: $(1) is the extra lock it installs (the CardFunction's
+# renderer), $(2) what it leaves out (the card fonts, but in the CardFunction), $(3) what else it
+# compiles ahead of time.
+define build_function
 	@$(LAMBDA_PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' || { \
 		echo "LAMBDA_PYTHON=$(LAMBDA_PYTHON) is not Python 3.13, the runtime's: the .pyc would" \
 		"not load. Put python3.13 on PATH or pass LAMBDA_PYTHON=/path/to/python3.13." >&2; exit 1; }
-	python3 -m pip install $(PIP_TARGET_FLAGS) --no-deps --target "$(ARTIFACTS_DIR)" -r functions/requirements.lock
+	python3 -m pip install $(PIP_TARGET_FLAGS) --no-deps --target "$(ARTIFACTS_DIR)" \
+		-r functions/requirements.lock $(addprefix -r ,$(1))
 	cd "$(ARTIFACTS_DIR)" && rm -rf $(RUNTIME_PROVIDED) $(UNUSED)
 	cp -R assembler/drboard_assembler functions/drboard_functions "$(ARTIFACTS_DIR)/"
-	cd "$(ARTIFACTS_DIR)" && rm -rf bin *-stubs
+	cd "$(ARTIFACTS_DIR)" && rm -rf bin *-stubs $(2)
 	find "$(ARTIFACTS_DIR)" \( -name "__pycache__" -o -name "*.pyi" \) -prune -exec rm -rf {} +
 	rm -rf "$(ARTIFACTS_DIR)"/*.dist-info/RECORD
 	cd "$(ARTIFACTS_DIR)" && $(LAMBDA_PYTHON) -m compileall -q -j 0 --invalidation-mode checked-hash \
-		-x '$(NOT_PRECOMPILED)' $(PRECOMPILED)
+		-x '$(NOT_PRECOMPILED)' $(PRECOMPILED) $(3)
+endef
+
+# The card fonts (0.8 MB) ship with the CardFunction only, which draws the cards.
+CARD_FONTS = drboard_functions/cards/fonts
+
+build-PushFunction build-PullFunction build-AdminFunction build-NotifyFunction:
+	$(call build_function,,$(CARD_FONTS))
+
+# The CardFunction adds the renderer (resvg, functions/card-requirements.lock) and keeps the fonts.
+build-CardFunction:
+	$(call build_function,functions/card-requirements.lock,,resvg_py)
 
 # functions/requirements.lock pins every package the functions ship (functions/requirements.txt
-# resolved for the runtime, less what the runtime brings). Run after changing requirements.txt.
+# resolved for the runtime, less what the runtime brings), functions/card-requirements.lock what
+# the CardFunction adds. Run after changing either list.
 lock:
 	python3 -m pip install --quiet uv
 	python3 -m uv pip compile functions/requirements.txt --python-version 3.13 \
 		--python-platform aarch64-manylinux_2_17 --no-annotate --custom-compile-command "make lock" \
 		$(addprefix --no-emit-package ,boto3 botocore s3transfer urllib3 python-dateutil jmespath six) \
 		--output-file functions/requirements.lock
+	python3 -m uv pip compile functions/card-requirements.txt --python-version 3.13 \
+		--python-platform aarch64-manylinux_2_17 --no-annotate --custom-compile-command "make lock" \
+		--constraint functions/requirements.lock --output-file functions/card-requirements.lock
 
 .PHONY: lock

@@ -33,8 +33,13 @@ def _table_definition(template: Path) -> dict[str, Any]:
     return {name: properties[name] for name in TABLE_PROPERTIES if name in properties}
 
 
-def create_board_table(client: Any, name: str) -> str:
-    """Create the table ``name`` shaped like BoardTable with a boto3 DynamoDB client; wait for it."""
-    client.create_table(TableName=name, **table_definition())
+def create_board_table(client: Any, name: str, *, stream: bool = False) -> str:
+    """Create the table ``name`` shaped like BoardTable with a boto3 DynamoDB client; wait for it.
+    ``stream``: with the resource's stream of changes too (what the NotifyFunction reads)."""
+    extra = {}
+    if stream:
+        spec = yaml_parse(TEMPLATE.read_text())["Resources"][RESOURCE]["Properties"]["StreamSpecification"]
+        extra = {"StreamSpecification": {"StreamEnabled": True, **spec}}
+    client.create_table(TableName=name, **table_definition(), **extra)
     client.get_waiter("table_exists").wait(TableName=name, WaiterConfig={"Delay": 0.05, "MaxAttempts": 200})
     return name

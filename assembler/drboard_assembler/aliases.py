@@ -26,6 +26,7 @@ character.
 from __future__ import annotations
 
 import unicodedata
+from collections.abc import Iterator
 from functools import cache
 from typing import Any
 
@@ -75,6 +76,8 @@ def confusable_skeleton(alias: str) -> str:
 
 def text_problem(text: str) -> str | None:
     """Why a text (a model name, a track's name, a design string) is not printable, or None."""
+    if text.isprintable():  # holds none of _NOT_TEXT's categories: no need to look closer
+        return None
     for char in text:
         if unicodedata.category(char) in _NOT_TEXT:
             return (f"holds the control or invisible character U+{ord(char):04X} "
@@ -82,19 +85,18 @@ def text_problem(text: str) -> str | None:
     return None
 
 
-def texts(value: Any, path: tuple[str | int, ...] = ()) -> list[tuple[tuple[str | int, ...], str]]:
+def texts(value: Any, path: tuple[str | int, ...] = ()) -> Iterator[tuple[tuple[str | int, ...], str]]:
     """Every string in a JSON-like value (dictionary keys included), with where it is."""
     if isinstance(value, str):
-        return [(path, value)]
-    if isinstance(value, dict):
-        found = []
+        yield path, value
+    elif isinstance(value, dict):
         for key, item in value.items():
-            found += texts(str(key), (*path, str(key)))
-            found += texts(item, (*path, str(key)))
-        return found
-    if isinstance(value, list | tuple):
-        return [hit for index, item in enumerate(value) for hit in texts(item, (*path, index))]
-    return []
+            name = str(key)
+            yield (*path, name), name
+            yield from texts(item, (*path, name))
+    elif isinstance(value, list | tuple):
+        for index, item in enumerate(value):
+            yield from texts(item, (*path, index))
 
 
 def _invisible(char: str) -> bool:

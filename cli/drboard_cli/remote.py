@@ -21,19 +21,28 @@ import urllib.parse
 import urllib.request
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from drboard_assembler.record import Record
 from drboard_functions import errors
 from drboard_functions.laps import LAP_COLUMNS
 from drboard_functions.models.domain import MAX_PAGE, Board
-from drboard_functions.models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
+from drboard_functions.models.notices import Delivery, TargetKind, WebhookList, WebhookSpec, WebhookView
 from drboard_functions.models.requests import (
     AliasAssignment,
     AliasRequest,
     BoardChanges,
     BoardSpec,
     ImportedSubmission,
+)
+from drboard_functions.models.seasons import (
+    FinalSpec,
+    RoundSpec,
+    SeasonChanges,
+    SeasonList,
+    SeasonSpec,
+    SeasonStandings,
+    SeasonSummary,
 )
 from drboard_functions.models.transfer import ExportKind, ExportPage, ImportReceipt
 from drboard_functions.models.views import (
@@ -65,7 +74,7 @@ from .joins import Joined, JoinRequest
 from .login import fresh_token
 
 T = TypeVar("T", bound=BaseModel)
-P = TypeVar("P", BoardList, RacerHistory, RacerView)
+P = TypeVar("P", BoardList, RacerHistory, RacerView, SeasonList)
 
 TIMEOUT_S = 20
 DEFAULT_RETRY_AFTER_S = 60
@@ -134,6 +143,15 @@ class HttpBoard:
                                 else LAP_COLUMNS)
         rows = [dict(row) for row in reader]
         return LapsPage(board_id, rows, _next_cursor((answer.headers or {}).get("Link", "")))
+
+    def racer_card(self, board_id: str, racer: str, kind: Literal["png", "svg"]) -> bytes:
+        """The racer's result card, as the board draws it."""
+        path = f"/boards/{_quote(board_id)}/racers/{_quote(racer)}/card.{kind}"
+        return bytes(self._call("GET", path, binary=True).body)
+
+    def season_card(self, season_id: str, kind: Literal["png", "svg"]) -> bytes:
+        """The season's podium card, as the board draws it."""
+        return bytes(self._call("GET", f"/seasons/{_quote(season_id)}/card.{kind}", binary=True).body)
 
     # ---- organisers (always signed) -------------------------------------------------------
 
@@ -218,6 +236,49 @@ class HttpBoard:
                             query={"cursor": cursor, "limit": str(limit)}, signed=True)
         return _parse(AuditPage, answer)
 
+    # ---- seasons (reads public, changes signed) -------------------------------------------
+
+    def seasons(self) -> list[SeasonSummary]:
+        """Every season, following the pages."""
+        return [season for page in self._pages(SeasonList, "/seasons", {}) for season in page.seasons]
+
+    def season(self, season_id: str, limit: int, cursor: str | None) -> SeasonStandings:
+        answer = self._call("GET", f"/seasons/{_quote(season_id)}",
+                            query={"limit": str(limit), "cursor": cursor})
+        return _parse(SeasonStandings, answer)
+
+    def create_season(self, spec: SeasonSpec) -> SeasonStandings:
+        return _parse(SeasonStandings, self._call("POST", "/seasons", body=spec, signed=True))
+
+    def update_season(self, season_id: str, changes: SeasonChanges) -> SeasonStandings:
+        body = changes.model_dump_json(exclude_unset=True).encode("utf-8")
+        answer = self._call("PATCH", f"/seasons/{_quote(season_id)}", body=body, signed=True)
+        return _parse(SeasonStandings, answer)
+
+    def add_round(self, season_id: str, board_id: str, spec: RoundSpec) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/rounds/{_quote(board_id)}"
+        return _parse(SeasonStandings, self._call("PUT", path, body=spec, signed=True))
+
+    def remove_round(self, season_id: str, board_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/rounds/{_quote(board_id)}"
+        return _parse(SeasonStandings, self._call("DELETE", path, signed=True))
+
+    def set_final(self, season_id: str, spec: FinalSpec) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/final"
+        return _parse(SeasonStandings, self._call("PUT", path, body=spec, signed=True))
+
+    def clear_final(self, season_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/final"
+        return _parse(SeasonStandings, self._call("DELETE", path, signed=True))
+
+    def close_season(self, season_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/close"
+        return _parse(SeasonStandings, self._call("POST", path, signed=True))
+
+    def reopen_season(self, season_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/reopen"
+        return _parse(SeasonStandings, self._call("POST", path, signed=True))
+
     def recheck_page(self, board_id: str, cursor: str | None) -> RecheckPage:
         answer = self._call("POST", f"/boards/{_quote(board_id)}/recheck", query={"cursor": cursor},
                             signed=True)
@@ -242,19 +303,22 @@ class HttpBoard:
         answer = self._call("GET", "/aliases/audit", query={"cursor": cursor, "limit": str(limit)},
                             signed=True)
         return _parse(AuditPage, answer)
-    def add_webhook(self, board_id: str, spec: WebhookSpec) -> WebhookView:
-        answer = self._call("POST", f"/boards/{_quote(board_id)}/webhooks", body=spec, signed=True)
+
+    # A board's webhooks, or a season's (``kind="season"``).
+
+    def add_webhook(self, target_id: str, spec: WebhookSpec, *, kind: TargetKind = "board") -> WebhookView:
+        answer = self._call("POST", _webhooks_path(kind, target_id), body=spec, signed=True)
         return _parse(WebhookView, answer)
 
-    def webhooks(self, board_id: str) -> WebhookList:
-        return _parse(WebhookList, self._call("GET", f"/boards/{_quote(board_id)}/webhooks", signed=True))
+    def webhooks(self, target_id: str, *, kind: TargetKind = "board") -> WebhookList:
+        return _parse(WebhookList, self._call("GET", _webhooks_path(kind, target_id), signed=True))
 
-    def remove_webhook(self, board_id: str, webhook_id: str) -> WebhookView:
-        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}"
+    def remove_webhook(self, target_id: str, webhook_id: str, *, kind: TargetKind = "board") -> WebhookView:
+        path = _webhooks_path(kind, target_id) + f"/{_quote(webhook_id)}"
         return _parse(WebhookView, self._call("DELETE", path, signed=True))
 
-    def test_webhook(self, board_id: str, webhook_id: str) -> Delivery:
-        path = f"/boards/{_quote(board_id)}/webhooks/{_quote(webhook_id)}/test"
+    def test_webhook(self, target_id: str, webhook_id: str, *, kind: TargetKind = "board") -> Delivery:
+        path = _webhooks_path(kind, target_id) + f"/{_quote(webhook_id)}/test"
         return _parse(Delivery, self._call("POST", path, signed=True))
 
     # ---- HTTP ---------------------------------------------------------------------------
@@ -275,8 +339,10 @@ class HttpBoard:
 
     def _call(self, method: str, path: str, *, body: BaseModel | bytes | None = None,
               query: Mapping[str, str | list[str] | None] | None = None,
-              signed: bool = False, token: str | None = None, text: bool = False) -> Answer:
-        """One request; the answer's JSON (its UTF-8 text with ``text``) and headers."""
+              signed: bool = False, token: str | None = None, text: bool = False,
+              binary: bool = False) -> Answer:
+        """One request; the answer's JSON (its UTF-8 text with ``text``, its bytes with
+        ``binary``) and headers."""
         given = {name: value for name, value in (query or {}).items() if value}
         token = token or (fresh_token(self.endpoint) if signed else None)
         prefix = tokens.route_prefix(token) if token else ""
@@ -294,8 +360,8 @@ class HttpBoard:
         try:
             with urllib.request.urlopen(request, timeout=self.timeout_s) as response:
                 data = response.read()
-                return Answer(response.status, data.decode("utf-8") if text else _json(data, url),
-                              response.headers)
+                body = data if binary else data.decode("utf-8") if text else _json(data, url)
+                return Answer(response.status, body, response.headers)
         except urllib.error.HTTPError as error:
             raise _domain_error(error, url) from None
         except (urllib.error.URLError, TimeoutError, ConnectionError) as error:
@@ -305,6 +371,10 @@ class HttpBoard:
 
 def _quote(part: str) -> str:
     return urllib.parse.quote(part, safe="")
+
+
+def _webhooks_path(kind: TargetKind, target_id: str) -> str:
+    return f"/{'seasons' if kind == 'season' else 'boards'}/{_quote(target_id)}/webhooks"
 
 
 _NEXT_LINK = re.compile(r'<([^>]*)>\s*;\s*rel="?next"?')

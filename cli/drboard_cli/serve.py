@@ -61,7 +61,10 @@ from drboard_functions.errors import (
     TooSoon,
 )
 from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
+from drboard_functions.routes.app import CORS
+from drboard_functions.routes.standings import answer, header_values, standings_of, wanted
 from drboard_functions.service import LeaderboardService
+from drboard_functions.stores.sqlite import SqliteStore
 from pydantic import ValidationError
 from rich.console import Console
 from uvicorn.protocols.http.h11_impl import H11Protocol
@@ -184,7 +187,14 @@ class BoardServer:
 
     def __init__(self, address: tuple[str, int], service: LeaderboardService,
                  desk: JoinDesk | None = None, *, log_requests: bool = False) -> None:
-        from drboard_functions.routes import ADMIN_TAG, admin_router, build_app, pull_router, push_router
+        from drboard_functions.routes import (
+            ADMIN_TAG,
+            admin_router,
+            build_app,
+            card_router,
+            pull_router,
+            push_router,
+        )
 
         self.service = service
         self.desk = desk
@@ -197,9 +207,14 @@ class BoardServer:
         # of those is answered 403 rather than 404.
         self.resolvers: queue.SimpleQueue[_Resolvers] = queue.SimpleQueue()
         for _ in range(RESOLVER_THREADS):
-            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, admin_router),
-                                          build_app(push_router, pull_router)))
+            self.resolvers.put(_Resolvers(build_app(push_router, pull_router, card_router, admin_router),
+                                          build_app(push_router, pull_router, card_router)))
         self.organiser_routes = RouteMatcher(tagged_routes(build_app(admin_router), ADMIN_TAG))
+        self.standings = standings_of(service)
+        # A board's version on the embedded board is one row of a local file: read on the
+        # server's loop, a kept page costs no hop to a worker thread. (A DynamoDB table's is a
+        # network call: it is read in the pool.)
+        self.versions_on_loop = isinstance(service.store, SqliteStore)
         self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
         self.open_streams = 0
         self.socket = _listening_socket(address)
@@ -365,6 +380,17 @@ class BoardServer:
                          f"{status}")
 
     async def _answer(self, scope: Scope, path: str, receive: Receive, send: Send) -> int:
+        if scope["method"] == "GET":
+            if self.versions_on_loop:
+                kept = self.kept_answer(scope, path)
+            else:
+                kept = await asyncio.get_running_loop().run_in_executor(
+                    self.pool, self.kept_answer, scope, path)
+            if kept is not None:
+                status, headers, data = kept
+                await send({"type": "http.response.start", "status": status, "headers": headers})
+                await send({"type": "http.response.body", "body": data})
+                return status
         try:
             body = await _request_body(scope, receive)
         except _BodyTooLarge:
@@ -380,6 +406,31 @@ class BoardServer:
         await send({"type": "http.response.start", "status": status, "headers": headers})
         await send({"type": "http.response.body", "body": data})
         return status
+
+    def kept_answer(self, scope: Scope, path: str) -> tuple[int, list[tuple[bytes, bytes]], bytes] | None:
+        """The answer of a board page kept for the board's version now (see
+        :mod:`drboard_functions.routes.standings`), if the request asks for one: no event, no
+        resolver, one read of the version."""
+        page = wanted("GET", path, scope["query_string"].decode("latin-1"))
+        if page is None:
+            return None
+        found = header_values(scope["headers"], b"if-none-match", b"origin", b"content-length",
+                              b"transfer-encoding")
+        if b"transfer-encoding" in found or found.get(b"content-length", "0") != "0":
+            return None  # a GET with a body goes the routes' way
+        try:
+            copy = self.standings.kept(page, self.invite() if page.html else None)
+        except DomainError:  # the store is busy: the routes say so
+            return None
+        if copy is None:
+            return None
+        kept = answer(copy, found.get(b"if-none-match"))
+        headers = kept.raw_headers
+        if b"origin" in found:
+            cors = CORS.to_dict(CORS.allowed_origin(found[b"origin"]))
+            headers = headers + [(name.lower().encode("latin-1"), value.encode("latin-1"))
+                                 for name, value in cors.items()]
+        return int(kept.status), headers, kept.body
 
     async def _stream(self, board_id: str, receive: Receive, send: Send) -> int:
         """Server-Sent Events: the board's tag now, then each time it changes, until the client

@@ -28,11 +28,13 @@ from urllib.parse import quote, urlencode
 from drboard_assembler.record import Record
 
 from . import charts
-from .display import DASH, PRIVATE_DESIGN, duration, gap, method_label, percent, seconds, when
+from . import conditions as condition_texts
+from .display import DASH, PRIVATE_DESIGN, UNKNOWN, duration, gap, method_label, percent, seconds, when
 from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, algorithm_differences, design_facts, fact_text
 from .models.domain import BoardStatus, Design, TimingMethod
+from .models.seasons import SeasonLink
 from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
 if TYPE_CHECKING:
@@ -57,6 +59,22 @@ class Invite:
 
 
 @dataclass(frozen=True)
+class Share:
+    """What a page's Open Graph and Twitter meta say, so that a link to it pasted in a chat
+    unfurls as its result card: absolute URLs (a link preview knows no page to resolve against)."""
+
+    title: str
+    description: str
+    url: str  # the page's own
+    image: str  # the card's PNG
+    alt: str
+    card_path: str  # the card's PNG, on this origin (the page shows it)
+    svg_path: str
+    width: int = 1200
+    height: int = 630
+
+
+@dataclass(frozen=True)
 class Assets:
     """The style sheet and the script every page inlines, and their CSP hashes."""
 
@@ -65,14 +83,14 @@ class Assets:
 
     @property
     def style_hash(self) -> str:
-        return _csp_hash(self.style)
+        return csp_hash(self.style)
 
     @property
     def script_hash(self) -> str:
-        return _csp_hash(self.script)
+        return csp_hash(self.script)
 
 
-def _csp_hash(text: str) -> str:
+def csp_hash(text: str) -> str:
     return "sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode()
 
 
@@ -104,9 +122,9 @@ def environment() -> Environment:
 
 
 def _render(template: str, *, title: str, heading: str, subtitle: str, live: dict[str, Any] | None = None,
-            screen: bool = False, **context: Any) -> str:
+            screen: bool = False, share: Share | None = None, **context: Any) -> str:
     return environment().get_template(template).render(
-        title=title, heading=heading, subtitle=subtitle, live=live, screen=screen,
+        title=title, heading=heading, subtitle=subtitle, live=live, screen=screen, share=share,
         refresh_s=REFRESH_S, assets=assets(), **context)
 
 
@@ -117,8 +135,27 @@ def board_path(board_id: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/view"
 
 
+def season_path(season_id: str) -> str:
+    return "/seasons/" + quote(season_id, safe="") + "/view"
+
+
 def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
+
+
+def season_card_path(season_id: str, kind: str = "png") -> str:
+    """A season's podium card (``png`` or ``svg``), served by the card routes."""
+    return "/seasons/" + quote(season_id, safe="") + f"/card.{kind}"
+
+
+def podium_path(season_id: str) -> str:
+    """A season's podium page: its card and the certificates of its first three, to print."""
+    return "/seasons/" + quote(season_id, safe="") + "/podium/view"
+
+
+def racer_card_path(board_id: str, racer: str, kind: str = "png") -> str:
+    """A racer's result card (``png`` or ``svg``), served by the card routes."""
+    return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + f"/card.{kind}"
 
 
 def compare_path(board_id: str, racers: Sequence[str]) -> str:
@@ -128,6 +165,11 @@ def compare_path(board_id: str, racers: Sequence[str]) -> str:
 
 def _insights_path(board_id: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/insights/view"
+
+
+def laps_path(board_id: str) -> str:
+    """Every lap of the board's submissions, as CSV (``drboard export --laps`` reads it too)."""
+    return "/boards/" + quote(board_id, safe="") + "/laps.csv"
 
 
 def design_summary(design: Design | None) -> str:
@@ -148,14 +190,16 @@ def index_page(boards: Iterable[BoardView]) -> str:
 
 def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: datetime,
                url: str = "", endpoint: str = "", qr_svg: str = "",
-               join_code: str | None = None) -> str:
-    """``/boards/{board}/view``: the board's status, window and rules, how to join and push,
-    and the standings with gaps to the leader and each model's design. ``screen`` is the
+               join_code: str | None = None, seasons: Sequence[SeasonLink] = ()) -> str:
+    """``/boards/{board}/view``: the board's status, window and rules, the seasons it counts
+    for (and whose final it is), how to join and push, and the standings with gaps to the
+    leader and each model's design. ``screen`` is the
     big-screen mode: sized for a room, one line a racer, the join code and a QR code
     (``qr_svg``, of ``url``), auto-scrolling."""
     board = page.board
     leader = page.entries[0].racer if page.entries and page.entries[0].rank == 1 else None
-    entries = [_entry(board.board_id, entry, leader) for entry in page.entries]
+    entries = [_entry(board.board_id, entry, leader, conditions=not screen and board.conditions is None)
+               for entry in page.entries]
     racers = "racer" if board.participants == 1 else "racers"
     next_path = None
     if page.next_cursor:
@@ -175,9 +219,12 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
         push_command=_push_command(board, endpoint, joined=join is not None), entries=entries,
         time_label=_time_label(board), best_lap_column=board.method != TimingMethod.BEST_LAP_TIME,
         next_path=next_path, insights_path=_insights_path(board.board_id),
+        laps_path=laps_path(board.board_id) if _laps_shown(board) else None,
         compare_top_path=(compare_path(board.board_id, [q.racer for q in qualified[:2]])
                           if len(qualified) >= 2 and not screen else None),
-        screen_path=board_path(board.board_id) + "?screen=1")
+        screen_path=board_path(board.board_id) + "?screen=1",
+        seasons=[{"path": season_path(link.season_id), "title": link.title, "final": link.final}
+                 for link in seasons])
 
 
 def waiting_page(board_id: str, screen: bool = False, *, join_code: str | None = None,
@@ -198,13 +245,26 @@ def join_page(invite: Invite, boards: Iterable[BoardView]) -> str:
                    boards=[{"path": board_path(b.board_id), "title": b.title} for b in boards])
 
 
-def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None = None) -> str:
-    """``/boards/{board}/racers/{racer}/view``: the counted run's laps, the action space, the
-    hyperparameters, the training, the racer's submissions over time and any flags, and links
-    to compare with the leader and the racer just ahead."""
+def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None = None,
+               origin: str = "") -> str:
+    """``/boards/{board}/racers/{racer}/view``: the racer's result card (named in the page's
+    Open Graph meta, with ``origin`` for its absolute URLs), the counted run's laps, the action
+    space, the hyperparameters, the training, the racer's submissions over time and any flags,
+    and links to compare with the leader and the racer just ahead."""
     entry, record, board = view.entry, view.record, view.board
     standing = (f"#{entry.rank} on {board.title} · {seconds(entry.time_ms)}" if entry.qualified
                 else f"#{entry.rank} on {board.title} · {percent(entry.best_completion_pct)} done")
+    result = (f"{seconds(entry.time_ms)}, " + ("the leader" if entry.rank == 1 else
+                                              f"{gap(entry.gap_ms)} to the leader")
+              if entry.qualified else f"{percent(entry.best_completion_pct)} done")
+    card = racer_card_path(board.board_id, view.racer)
+    share = Share(
+        title=f"{view.racer}: #{entry.rank} of {board.participants} on {board.title}",
+        description=f"{result} with {entry.model_name} · {board.track_name}, {method_label(board)}.",
+        url=origin + racer_path(board.board_id, view.racer), image=origin + card,
+        alt=f"Result card: {view.racer}, #{entry.rank} on {board.title}, {result}, model "
+            f"{entry.model_name}",
+        card_path=card, svg_path=racer_card_path(board.board_id, view.racer, "svg"))
     links: list[dict[str, str]] = []
     for other, text in ((leader, "Compare with the leader, {}"), (ahead, "Compare with {}, just ahead")):
         if other and other != view.racer and all(other not in link["text"] for link in links):
@@ -222,6 +282,7 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
         "private": PRIVATE_DESIGN if record is None else None,
     }
     title = f"{view.racer} · {board.title} · drboard"
+    context["share"] = share
     if record is None:
         return _render("racer.html", title=title, heading=view.racer,
                        subtitle=f"{standing} · {entry.model_name}", **context)
@@ -234,6 +295,9 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
                     strong=lap.complete) for lap in run.laps], "seconds")
     context["action_chart"] = _action_space_chart(record)
     context["design"] = [("model", record.model_name), *_design_rows(record)]
+    context["sources"] = _source_rows(record)
+    context["conditions"] = condition_texts.rows(entry.conditions)
+    context["penalties_note"] = condition_texts.PENALTIES_NOTE
     context["training"] = None
     context["training_chart"] = None
     if record.training:
@@ -276,7 +340,8 @@ def compare_page(comparison: Comparison, records: Sequence[Record | None] = ()) 
                                              comparison.differences))
     rows = {"choices": [], "by_algorithm": [], "same": []}  # type: dict[str, list[dict[str, Any]]]
     for fact, label in LABELS.items():
-        values = [fact_text(fact, getattr(c.facts, fact)) for c in comparison.racers]
+        values = [fact_text(fact, getattr(c.facts, fact), fact in c.facts.unknown)
+                  for c in comparison.racers]
         differs = fact in comparison.differences
         group = "by_algorithm" if fact in by_algorithm else "choices" if differs else "same"
         rows[group].append({"label": label, "cells": values, "differs": differs})
@@ -366,6 +431,9 @@ def rules_line(board: BoardView) -> str:
         parts.append(f"at most {board.max_submissions} submissions each")
     if board.flagged_runs == "unranked":
         parts.append("flagged runs do not rank")
+    if board.conditions is not None:
+        parts.append(f"evaluated with {condition_texts.summary(board.conditions)}")
+    parts.append("times include penalties")
     return f"{_race(board)} · " + " · ".join(parts)
 
 
@@ -395,6 +463,12 @@ def _open(board: BoardView) -> bool:
     return board.status != BoardStatus.CLOSED
 
 
+def _laps_shown(board: BoardView) -> bool:
+    """Whether the board's laps may be downloaded: they show with the designs (a board that
+    keeps its designs private until it closes keeps its laps too)."""
+    return board.participants > 0 and (board.designs == "public" or board.status == BoardStatus.CLOSED)
+
+
 def _time_label(board: BoardView) -> str:
     return {TimingMethod.BEST_LAP_TIME: "Best lap", TimingMethod.AVG_LAP_TIME: "Average",
             TimingMethod.TOTAL_TIME: "Total"}.get(board.method, "Time")
@@ -405,7 +479,10 @@ def _live(board_id: str, etag: str, missing: bool = False) -> dict[str, Any]:
             "etag": etag, "missing": missing}
 
 
-def _entry(board_id: str, entry: EntryView, leader: str | None) -> dict[str, Any]:
+def _entry(board_id: str, entry: EntryView, leader: str | None, *,
+           conditions: bool = False) -> dict[str, Any]:
+    """One row of the standings; with ``conditions`` (a board that takes runs of any
+    conditions), what the entry's evaluation ran under."""
     css = (f"q{entry.rank}" if entry.rank <= 3 else "") if entry.qualified else "dnq"
     return {
         "css": css, "racer": entry.racer, "submission_id": entry.submission_id, "rank": entry.rank,
@@ -414,6 +491,7 @@ def _entry(board_id: str, entry: EntryView, leader: str | None) -> dict[str, Any
         "gap": gap(entry.gap_ms) if entry.qualified else DASH,
         "best_lap": seconds(entry.best_lap_ms), "laps": entry.laps_completed,
         "design": design_summary(entry.design),
+        "conditions": condition_texts.short(entry.conditions) if conditions else "",
         "compare_path": (compare_path(board_id, [leader, entry.racer])
                          if leader and leader != entry.racer and entry.design is not None else None),
     }
@@ -441,10 +519,14 @@ def _flag_text(flags: list[str]) -> str:
 
 
 def _design_rows(record: Record) -> list[tuple[str, str]]:
+    """Each design fact, unknown where the run's files do not state it."""
     facts = design_facts(record)
-    rows = [(label, fact_text(name, getattr(facts, name))) for name, label in LABELS.items()
-            if not name.startswith("training") and getattr(facts, name) is not None]
+    rows = [(label, fact_text(name, getattr(facts, name), name in facts.unknown))
+            for name, label in LABELS.items() if not name.startswith("training")
+            and (getattr(facts, name) is not None or name in facts.unknown)]
     hyper = record.design.hyperparameters
+    if hyper is None:
+        return rows
     shown = {"discount_factor", "lr", "batch_size", "beta_entropy", "num_epochs",
              "num_episodes_between_training", "loss_type"}
     rest = hyper.model_dump(exclude=shown | {"other"}, exclude_none=True) | hyper.other
@@ -452,8 +534,18 @@ def _design_rows(record: Record) -> list[tuple[str, str]]:
     return rows
 
 
-def _action_space_chart(record: Record) -> charts.Figure:
+def _source_rows(record: Record) -> list[tuple[str, str]]:
+    """The file each design fact was read from (none for a record from before they were kept)."""
+    sources = record.design.sources
+    if sources is None:
+        return []
+    return [(fact.replace("_", " "), name or UNKNOWN) for fact, name in sources.model_dump().items()]
+
+
+def _action_space_chart(record: Record) -> charts.Figure | None:
     space = record.design.action_space
+    if space is None:
+        return None
     limit = max(space.max_steering, 1.0)
     if space.actions:
         return charts.points(

@@ -33,6 +33,7 @@ from drboard_functions.models.domain import (
     TimingMethod,
     WriteOutcome,
 )
+from drboard_functions.models.notices import MAX_ERROR_CHARS, Target, Webhook
 from drboard_functions.service import evaluation_fingerprints, scored_write
 from drboard_functions.service.copies import run_prints
 from drboard_functions.stores.base import (
@@ -47,6 +48,7 @@ from drboard_functions.stores.base import (
     LimitReached,
 )
 
+from tests.contract.season_contract import SeasonStoreContract
 from tests.recordkit import LapSpec, copy_of, make_record
 
 T0 = datetime(2025, 3, 1, 12, 0, tzinfo=UTC)
@@ -98,6 +100,12 @@ def event(n: int, action: str = "push", board_id: str = TRACK) -> AuditEvent:
                                       "event_id": f"{at(n).isoformat()}-{n:08x}", "actor": "local"})
 
 
+def webhook(webhook_id: str, target: Target | None = None, created: float = 0,
+            url: str = "https://discord.com/api/webhooks/1/s3cr3t") -> Webhook:
+    return Webhook(webhook_id=webhook_id, target=target or Target(target_id=TRACK), kind="discord",
+                   url=url, events=["new-leader", "board-close"], created_at=at(created))
+
+
 def cooldown(seconds: int, now: datetime) -> SubmissionLimits:
     return SubmissionLimits(now=now, cooldown_s=seconds)
 
@@ -113,6 +121,7 @@ def lap(ms: int) -> list[LapSpec]:
 def version(store: BoardStore, board_id: str = TRACK) -> int:
     stored = store.get_board(board_id)
     assert stored is not None
+    assert store.board_version(board_id) == stored.version  # the cheap read agrees
     return stored.version
 
 
@@ -134,8 +143,9 @@ def ranks_by_listing(store: BoardStore, board_id: str = TRACK) -> dict[str, int]
     return {e.racer: 1 + sum(other.score_key < e.score_key for other in entries) for e in entries}
 
 
-class StoreContract:
-    """Behaviour every BoardStore adapter shares. Subclasses supply the ``store`` fixture."""
+class StoreContract(SeasonStoreContract):
+    """Behaviour every BoardStore adapter shares (seasons' in ``season_contract.py``).
+    Subclasses supply the ``store`` fixture."""
 
     @pytest.fixture
     def store(self) -> BoardStore:
@@ -650,6 +660,11 @@ class StoreContract:
         assert [s.version for s in store.list_boards()] == [seen[-1]]
         assert store.front_page(TRACK, 1)[0] == store.get_board(TRACK)
 
+    def test_a_board_that_is_not_there_has_no_version(self, store: BoardStore) -> None:
+        assert store.board_version(TRACK) is None
+        store.create_board(make_board())
+        assert store.board_version(TRACK) == version(store)
+
     def test_what_leaves_the_standings_alone_leaves_the_version(self, store: BoardStore) -> None:
         submit(store, make_record("Ada", lap(8000)), at(0))
         before = version(store)
@@ -771,3 +786,72 @@ class StoreContract:
         with pytest.raises(KeyError):
             store.import_batch(TRACK, ImportBatch(rows=[row], fingerprints=[], skeletons=[],
                                                   runs=[], audit=[]))
+
+    # ---- webhooks and announcements' sent markers ----------------------------------------------
+
+    def test_webhooks_are_kept_per_target_oldest_first_with_their_whole_url(self, store: BoardStore) -> None:
+        board, other = Target(target_id=TRACK), Target(target_id=TRACK + "_cw")
+        season = Target(kind="season", target_id=TRACK)
+        store.put_webhook(webhook("b2", board, created=2))
+        store.put_webhook(webhook("b1", board, created=1, url="https://hooks.slack.com/services/T/B/x"))
+        store.put_webhook(webhook("o1", other))
+        store.put_webhook(webhook("s1", season))
+        assert [w.webhook_id for w in store.webhooks(board.key)] == ["b1", "b2"]
+        assert store.webhooks(board.key)[0].url == "https://hooks.slack.com/services/T/B/x"
+        assert [w.webhook_id for w in store.webhooks(other.key)] == ["o1"]
+        assert [w.webhook_id for w in store.webhooks(season.key)] == ["s1"], "a season's are its own"
+        assert store.webhooks(Target(target_id="nowhere").key) == []
+        assert sorted(w.webhook_id for w in store.all_webhooks()) == ["b1", "b2", "o1", "s1"]
+
+    def test_putting_a_webhook_again_replaces_it(self, store: BoardStore) -> None:
+        store.put_webhook(webhook("b1"))
+        store.put_webhook(webhook("b1").model_copy(update={"events": ["top-3"]}))
+        (stored,) = store.webhooks(Target(target_id=TRACK).key)
+        assert stored.events == ["top-3"]
+
+    def test_removing_a_webhook_answers_it_once(self, store: BoardStore) -> None:
+        target = Target(target_id=TRACK)
+        store.put_webhook(webhook("b1", target))
+        store.put_webhook(webhook("b2", target, created=1))
+        removed = store.delete_webhook(target.key, "b1")
+        assert removed is not None and removed.url == "https://discord.com/api/webhooks/1/s3cr3t"
+        assert store.delete_webhook(target.key, "b1") is None
+        assert store.delete_webhook(Target(target_id="other").key, "b2") is None, "only its target's"
+        assert [w.webhook_id for w in store.webhooks(target.key)] == ["b2"]
+
+    def test_a_delivery_is_noted_on_its_webhook_and_a_success_clears_the_error(
+            self, store: BoardStore) -> None:
+        target = Target(target_id=TRACK)
+        store.put_webhook(webhook("b1", target))
+        store.note_delivery(target.key, "b1", at(10), "the service answered 404 Not Found" + "!" * 400)
+        (failed,) = store.webhooks(target.key)
+        assert failed.last_error is not None and failed.last_error.startswith("the service answered 404")
+        assert len(failed.last_error) == MAX_ERROR_CHARS and failed.last_error_at == at(10)
+        assert failed.last_sent_at is None
+        store.note_delivery(target.key, "b1", at(20), None)
+        (sent,) = store.webhooks(target.key)
+        assert (sent.last_sent_at, sent.last_error, sent.last_error_at) == (at(20), None, None)
+
+    def test_a_delivery_noted_after_its_webhook_was_removed_brings_nothing_back(
+            self, store: BoardStore) -> None:
+        target = Target(target_id=TRACK)
+        store.put_webhook(webhook("b1", target))
+        store.delete_webhook(target.key, "b1")
+        store.note_delivery(target.key, "b1", at(10), "timed out")
+        assert store.webhooks(target.key) == [] and store.all_webhooks() == []
+
+    def test_an_event_is_claimed_for_a_webhook_once_until_sent(self, store: BoardStore) -> None:
+        assert store.claim_notice("club#entry#s1", "b1", at(0), 120) is True
+        assert store.claim_notice("club#entry#s1", "b1", at(60), 120) is False, "being sent"
+        assert store.claim_notice("club#entry#s1", "b2", at(60), 120) is True, "per webhook"
+        assert store.claim_notice("club#entry#s2", "b1", at(60), 120) is True, "per event"
+        store.finish_notice("club#entry#s1", "b1", sent=True)
+        assert store.claim_notice("club#entry#s1", "b1", at(10_000), 120) is False, "sent: never again"
+
+    def test_a_failed_event_or_a_lapsed_lease_may_be_claimed_again(self, store: BoardStore) -> None:
+        assert store.claim_notice("club#open#1", "b1", at(0), 120)
+        store.finish_notice("club#open#1", "b1", sent=False)
+        assert store.claim_notice("club#open#1", "b1", at(1), 120) is True, "the next try takes it"
+        assert store.claim_notice("club#open#1", "b1", at(100), 120) is False
+        assert store.claim_notice("club#open#1", "b1", at(121), 120) is True, \
+            "a sender that died after claiming holds it for its lease only"

@@ -229,6 +229,9 @@ def test_the_racer_page_draws_the_laps_and_the_action_space(served: Served, new_
     assert charts.count() >= 3
     assert page.locator("figure.chart").first.locator("rect").count() == 5  # Blaze's five laps
     assert page.locator("figure.chart").nth(1).locator("circle").count() == 10  # ten actions
+    card = page.locator("figure.card img")
+    expect(card).to_have_js_property("complete", True)
+    assert card.evaluate("img => [img.naturalWidth, img.naturalHeight]") == [1200, 630], "the PNG card"
     shot(page, "racer-page-1280x900")
 
 

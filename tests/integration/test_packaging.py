@@ -50,3 +50,12 @@ def test_every_module_of_the_three_packages_ships(wheel: zipfile.ZipFile) -> Non
 def test_the_drboard_command_is_installed(wheel: zipfile.ZipFile) -> None:
     (entry_points,) = [n for n in wheel.namelist() if n.endswith("entry_points.txt")]
     assert "drboard = drboard_cli.main:cli" in wheel.read(entry_points).decode()
+
+
+def test_the_card_fonts_their_licence_widths_and_templates_ship(wheel: zipfile.ZipFile) -> None:
+    names = set(wheel.namelist())
+    fonts = "drboard_functions/cards/fonts/"
+    assert {fonts + "LiberationSans-Regular.ttf", fonts + "LiberationSans-Bold.ttf",
+            fonts + "LICENSE", fonts + "widths.json"} <= names, "the font ships with its licence"
+    assert {"drboard_functions/templates/cards/racer.svg", "drboard_functions/templates/cards/podium.svg",
+            "drboard_functions/templates/podium.html"} <= names

@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import json
 import re
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -28,7 +29,7 @@ COGNITO_PREFIX = "/cognito"
 
 ROOT = Path(__file__).parents[2]
 EVENTS = ROOT / "events"
-FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull", "AdminFunction": "admin"}
+FUNCTIONS = {"PushFunction": "push", "PullFunction": "pull", "AdminFunction": "admin", "CardFunction": "card"}
 
 
 @pytest.fixture(scope="module")
@@ -50,9 +51,9 @@ def cloudformation(sam: dict[str, Any]) -> dict[str, Any]:
 
 def _app_operations(kind: str) -> dict[tuple[str, str], dict[str, Any]]:
     """(METHOD, path) -> OpenAPI operation of the routes the function's resolver serves."""
-    from drboard_functions.routes import admin_router, build_app, pull_router, push_router
+    from drboard_functions.routes import admin_router, build_app, card_router, pull_router, push_router
 
-    router = {"push": push_router, "pull": pull_router, "admin": admin_router}[kind]
+    router = {"push": push_router, "pull": pull_router, "admin": admin_router, "card": card_router}[kind]
     paths = json.loads(build_app(router).get_openapi_json_schema())["paths"]
     return {(method.upper(), path): operation for path, methods in paths.items()
             for method, operation in methods.items()}
@@ -99,7 +100,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 25, "the push, /me, /me/alias and the twenty-two organiser routes"
+    assert len(signed) == 37, "the push, /me, /me/alias, 22 organiser routes, 12 of seasons"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()
@@ -229,6 +230,46 @@ def test_the_api_is_throttled_logged_and_its_functions_reserved(
     assert 0 < int(parameters["ApiRateLimit"]["Default"]) <= int(parameters["ApiBurstLimit"]["Default"])
 
 
+def test_an_optional_cdn_keeps_only_what_the_board_says_and_passes_signed_calls_through(
+        sam: dict[str, Any], cloudformation: dict[str, Any]) -> None:
+    from drboard_functions.routes.responses import PUBLIC_CACHE
+
+    parameter = sam["Parameters"]["CdnDistribution"]
+    assert (parameter["Default"], sorted(parameter["AllowedValues"])) == ("false", ["false", "true"])
+    assert sam["Conditions"]["WithCdn"] == {"Fn::Equals": [{"Ref": "CdnDistribution"}, "true"]}
+    resources = cloudformation["Resources"]
+    cdn = {name: resources[name] for name in ("PublicReadsCachePolicy", "ApiRequestPolicy", "BoardCdn")}
+    assert all(resource["Condition"] == "WithCdn" for resource in cdn.values())
+    assert cloudformation["Outputs"]["CdnUrl"]["Condition"] == "WithCdn"
+
+    # Kept as long as the board's own Cache-Control says, and never past a few seconds; an
+    # answer that says nothing (signed, organiser, errors) is not kept at all.
+    policy = cdn["PublicReadsCachePolicy"]["Properties"]["CachePolicyConfig"]
+    max_age = int(re.search(r"max-age=(\d+)", PUBLIC_CACHE)[1])  # type: ignore[index]
+    assert policy["MinTTL"] == policy["DefaultTTL"] == 0 and max_age <= policy["MaxTTL"] <= 5
+    key = policy["ParametersInCacheKeyAndForwardedToOrigin"]
+    assert key["QueryStringsConfig"] == {"QueryStringBehavior": "all"}
+    assert set(key["HeadersConfig"]["Headers"]) == {"Authorization", "Origin"}  # forwarded, never shared
+    assert key["CookiesConfig"] == {"CookieBehavior": "none"}
+
+    config = cdn["BoardCdn"]["Properties"]["DistributionConfig"]
+    [origin] = config["Origins"]
+    assert origin["DomainName"] == {"Fn::Sub": "${BoardApi}.execute-api.${AWS::Region}.${AWS::URLSuffix}"}
+    assert origin["CustomOriginConfig"]["OriginProtocolPolicy"] == "https-only"
+    default = config["DefaultCacheBehavior"]
+    assert default["CachePolicyId"] == {"Ref": "PublicReadsCachePolicy"}
+    assert default["OriginRequestPolicyId"] == {"Ref": "ApiRequestPolicy"}
+    assert set(default["CachedMethods"]) == {"GET", "HEAD"} and "POST" in default["AllowedMethods"]
+    [signed_in] = config["CacheBehaviors"]
+    assert signed_in["PathPattern"] == COGNITO_PREFIX + "/*"
+    assert signed_in["CachePolicyId"] == "4135ea2d-6df8-44a3-9df3-4b5a84be39ad"  # CachingDisabled
+    assert {error["ErrorCachingMinTTL"] for error in config["CustomErrorResponses"]} == {0}
+    assert {404, 500, 503} <= {error["ErrorCode"] for error in config["CustomErrorResponses"]}
+    # The announcements link to the pages viewers read: the CDN's when there is one.
+    url = sam["Resources"]["NotifyFunction"]["Properties"]["Environment"]["Variables"]["BOARD_URL"]
+    assert url["Fn::If"][0] == "WithCdn" and "BoardCdn.DomainName" in url["Fn::If"][1]["Fn::Sub"]
+
+
 # ---- each handler with only its template environment and its template permissions ------------
 
 
@@ -267,6 +308,16 @@ def _granted(cloudformation: dict[str, Any], function: str) -> set[tuple[str, st
     return granted
 
 
+def pull_writes(cloudformation: dict[str, Any], function: str = "PullFunction") -> list[Any]:
+    """The conditions of the function's statements that grant a write (the pull function's by
+    default)."""
+    role = cloudformation["Resources"][f"{function}Role"]["Properties"]
+    return [statement.get("Condition") for policy in role.get("Policies", [])
+            for statement in policy["PolicyDocument"]["Statement"]
+            if any(a.startswith("dynamodb:Put") for a in ([statement["Action"]] if isinstance(
+                statement["Action"], str) else statement["Action"]))]
+
+
 def _resource_kind(resource: Any) -> str:
     text = json.dumps(resource)
     if "/index/" in text:
@@ -276,12 +327,20 @@ def _resource_kind(resource: Any) -> str:
     return "table"
 
 
+#: What the pseudo parameters of a ``!Sub`` resolve to here.
+PSEUDO = {"AWS::Region": "us-east-1", "AWS::URLSuffix": "amazonaws.com", "AWS::AccountId": "123456789012"}
+
+
 def _environment(cloudformation: dict[str, Any], function: str, names: dict[str, str]) -> dict[str, str]:
     variables = cloudformation["Resources"][function]["Properties"]["Environment"]["Variables"]
     resolved = {}
     for key, value in variables.items():
+        if isinstance(value, dict) and "Fn::If" in value:  # the parameters' defaults: no condition holds
+            value = value["Fn::If"][2]
         if isinstance(value, dict) and "Ref" in value:
             value = names.get(value["Ref"], value["Ref"])
+        elif isinstance(value, dict) and isinstance(value.get("Fn::Sub"), str):
+            value = re.sub(r"\$\{([^}]+)\}", lambda m: (names | PSEUDO).get(m[1], m[1]), value["Fn::Sub"])
         resolved[key] = str(value)
     return resolved
 
@@ -310,7 +369,7 @@ def deployed(aws: CallRecorder, sam: dict[str, Any]) -> dict[str, str]:
     """The names Refs resolve to: the resources made on moto, and the parameters' defaults."""
     names = {name: str(p["Default"]) for name, p in sam.get("Parameters", {}).items()}
     names |= {"BoardTable": "drboard-BoardTable", "ArchiveBucket": "drboard-archive"}
-    create_board_table(boto3.client("dynamodb"), names["BoardTable"])
+    create_board_table(boto3.client("dynamodb"), names["BoardTable"], stream=True)
     boto3.client("s3").create_bucket(Bucket=names["ArchiveBucket"])
     aws.calls.clear()
     return names
@@ -319,10 +378,10 @@ def deployed(aws: CallRecorder, sam: dict[str, Any]) -> dict[str, str]:
 def _invoke(kind: str, event_file: str, query: dict[str, str] | None = None) -> dict[str, Any]:
     """Run a function's handler on an example event (with this query string instead, if given),
     as a fresh container would: the wiring reads the environment again."""
-    from drboard_functions.handlers import admin, pull, push, wiring
+    from drboard_functions.handlers import admin, card, pull, push, wiring
 
     wiring.service_from_environment.cache_clear()
-    handler = {"push": push, "pull": pull, "admin": admin}[kind].lambda_handler
+    handler = {"push": push, "pull": pull, "admin": admin, "card": card}[kind].lambda_handler
     event = json.loads((EVENTS / event_file).read_text())
     if query is not None:
         event["queryStringParameters"] = query
@@ -367,8 +426,10 @@ def test_pull_works_with_its_template_environment_and_permissions(
     used = set(aws.calls)
     assert used, "the pull function reads the table"
     assert used <= granted, f"calls not allowed by the template: {used - granted}"
-    assert not any(action.startswith(("s3:", "dynamodb:Put", "dynamodb:Update"))
+    assert not any(action.startswith(("s3:", "dynamodb:Update", "dynamodb:Delete"))
                    for action, _ in granted), "the pull function only reads"
+    assert pull_writes(cloudformation) == [{"ForAllValues:StringLike": {
+        "dynamodb:LeadingKeys": ["#RESULTS#*"]}}], "but for the results a season keeps"
 
 
 def test_admin_works_with_its_template_environment_and_permissions(
@@ -411,6 +472,25 @@ def test_admin_works_with_its_template_environment_and_permissions(
     assert ("dynamodb:BatchGetItem", "table") in used
 
 
+def test_the_card_function_draws_a_card_with_its_template_environment_and_permissions(
+    cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _isolate(monkeypatch, _environment(cloudformation, "PushFunction", deployed))
+    assert _invoke("push", "push.json")["statusCode"] == 201
+    aws.calls.clear()
+    _isolate(monkeypatch, _environment(cloudformation, "CardFunction", deployed))
+    result = _invoke("card", "card_racer.json")
+    assert result["statusCode"] == 200, result["body"][:300]
+    assert result["headers"]["Content-Type"] == "image/png"
+    used = set(aws.calls)
+    assert used and used <= _granted(cloudformation, "CardFunction"), used
+    assert not any(action.startswith(("s3:", "dynamodb:Update", "dynamodb:Delete"))
+                   for action, _ in _granted(cloudformation, "CardFunction")), "cards only read"
+    assert pull_writes(cloudformation, "CardFunction") == pull_writes(cloudformation), \
+        "but for the results a season keeps, as its page does"
+
+
 def test_the_racer_routes_read_with_the_pull_functions_permissions(
     cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
     monkeypatch: pytest.MonkeyPatch,
@@ -426,3 +506,85 @@ def test_the_racer_routes_read_with_the_pull_functions_permissions(
     used = set(aws.calls)
     assert ("dynamodb:Query", "index") in used, "a racer's history is one query of the by_racer index"
     assert used <= _granted(cloudformation, "PullFunction")
+
+
+# ---- the announcer: the table's stream of changes, as Lambda hands it to the NotifyFunction ----
+
+
+def _stream_records(table: str) -> list[dict[str, Any]]:
+    """Every record of the table's stream so far (moto's), as the event source mapping hands
+    them to a function: with the stream's ARN, and the creation time in epoch seconds."""
+    client = boto3.client("dynamodbstreams", endpoint_url="https://streams.dynamodb.us-east-1.amazonaws.com/")
+    (stream,) = client.list_streams(TableName=table)["Streams"]
+    arn = stream["StreamArn"]
+    records = []
+    for shard in client.describe_stream(StreamArn=arn)["StreamDescription"]["Shards"]:
+        iterator = client.get_shard_iterator(StreamArn=arn, ShardId=shard["ShardId"],
+                                             ShardIteratorType="TRIM_HORIZON")["ShardIterator"]
+        for record in client.get_records(ShardIterator=iterator)["Records"]:
+            change = dict(record["dynamodb"])
+            created = change.get("ApproximateCreationDateTime")
+            if created is not None:
+                change["ApproximateCreationDateTime"] = created.timestamp()
+            records.append({**record, "dynamodb": change, "eventSourceARN": arn})
+    return records
+
+
+def _matches(pattern: Any, value: Any) -> bool:
+    """Whether an event matches an EventBridge-style filter pattern (the shapes the template's
+    FilterCriteria use: nested keys, lists of values, ``{"prefix": ...}`` or ``{"exists": true}``)."""
+    if isinstance(pattern, dict):
+        return isinstance(value, dict) and all(name in value and _matches(inner, value[name])
+                                               for name, inner in pattern.items())
+    return any(option.get("exists") is True if isinstance(option, dict) and "exists" in option
+               else value.startswith(option["prefix"]) if isinstance(option, dict) else value == option
+               for option in pattern)
+
+
+def test_notify_announces_the_streams_entry_changes_with_its_template_environment_and_permissions(
+    sam: dict[str, Any], cloudformation: dict[str, Any], deployed: dict[str, str], aws: CallRecorder,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from drboard_functions import services
+    from drboard_functions.handlers import notify, wiring
+    from drboard_functions.models.notices import WebhookSpec
+
+    from tests.recordkit import make_record
+    from tests.unit.test_announcements import FakeChat
+
+    _isolate(monkeypatch, _environment(cloudformation, "PushFunction", deployed))
+    assert _invoke("push", "push.json")["statusCode"] == 201  # before the webhook: not announced
+    board = json.loads((EVENTS / "push.json").read_text())["pathParameters"]["board"]
+    time.sleep(1.01 - time.time() % 1)  # the stream's times are whole seconds: the next one
+    chat = FakeChat()
+    try:
+        service = services.dynamodb_service(deployed["BoardTable"])
+        service.add_webhook(board, WebhookSpec(kind="json", url=chat.url))
+        service.push(make_record("Blaze", [(5000, 100)], model="blaze-v2"), board)
+        pattern = json.loads(sam["Resources"]["NotifyFunction"]["Properties"]["Events"]["EntryChanges"]
+                             ["Properties"]["FilterCriteria"]["Filters"][0]["Pattern"])
+        records = [r for r in _stream_records(deployed["BoardTable"]) if _matches(pattern, r)]
+        assert {r["dynamodb"]["Keys"]["board"]["S"] for r in records} == {board}, \
+            "entries only: not the runs' authors (R#<racer> in #RUN#... partitions)"
+        assert len(records) == 2, "each push's entry"
+        aws.calls.clear()
+
+        environment = _environment(cloudformation, "NotifyFunction", deployed)
+        assert environment["BOARD_URL"].startswith("https://")
+        _isolate(monkeypatch, environment)
+        wiring.service_from_environment.cache_clear()
+        wiring.notifier_from_environment.cache_clear()
+        answer = notify.lambda_handler({"Records": records}, LocalContext())
+        assert answer == {"batchItemFailures": []}
+        (body,) = chat.bodies
+        assert body["event"] == "new-leader" and body["announcement"]["racer"] == "Blaze"
+        assert body["text"].endswith(environment["BOARD_URL"] + f"/boards/{board}/view")
+        used = set(aws.calls)
+        granted = _granted(cloudformation, "NotifyFunction")
+        assert used <= granted, f"calls not allowed by the template: {used - granted}"
+        assert ("dynamodb:PutItem", "table") in used, "the sent marker"
+
+        retried = notify.lambda_handler({"Records": records}, LocalContext())
+        assert retried == {"batchItemFailures": []} and len(chat.bodies) == 1, "sent once"
+    finally:
+        chat.close()

@@ -15,6 +15,12 @@ from packaging.utils import canonicalize_name
 ROOT = Path(__file__).parents[2]
 FUNCTIONS_REQUIREMENTS = ROOT / "functions" / "requirements.txt"
 CLI_REQUIREMENTS = ROOT / "cli" / "requirements.txt"
+CARD_REQUIREMENTS = ROOT / "functions" / "card-requirements.txt"
+#: The card renderer runs in the CardFunction, which adds its own list, and in the CLI.
+CARD_MODULES = {"functions/drboard_functions/cards/png.py"}
+#: The writer of the card fonts' widths table, a developer's tool (`python -m
+#: drboard_functions.cards.widths`) that runs with the test extra's fontTools, never in a function.
+DEVELOPER_TOOLS = {"functions/drboard_functions/cards/widths.py": {"fonttools"}}
 
 
 def declared(path: Path) -> set[str]:
@@ -58,9 +64,11 @@ def distributions_imported_by(folder: Path) -> dict[str, set[str]]:
 def test_the_functions_and_the_assembler_declare_what_they_import() -> None:
     functions = declared(FUNCTIONS_REQUIREMENTS)
     everything = functions | declared(CLI_REQUIREMENTS)
-    undeclared = {path: dists - functions for path, dists
+    allowed = {path: functions | declared(CARD_REQUIREMENTS) for path in CARD_MODULES}
+    allowed |= {path: functions | tools for path, tools in DEVELOPER_TOOLS.items()}
+    undeclared = {path: dists - allowed.get(path, functions) for path, dists
                   in distributions_imported_by(ROOT / "functions" / "drboard_functions").items()
-                  if dists - functions}
+                  if dists - allowed.get(path, functions)}
     # The assembler runs in the functions (the Record schema) and in the CLI (reading files).
     undeclared |= {path: dists - everything for path, dists
                    in distributions_imported_by(ROOT / "assembler" / "drboard_assembler").items()
@@ -82,3 +90,17 @@ def test_a_library_imported_through_another_is_declared_too() -> None:
     source = (ROOT / "cli" / "drboard_cli" / "login.py").read_text()
     assert "authlib.integrations.requests_client" in source
     assert "requests" in declared(CLI_REQUIREMENTS)
+
+
+def renderer_requirement(path: Path) -> str:
+    lines = (line.split("#", 1)[0].strip() for line in path.read_text().splitlines())
+    (found,) = [Requirement(line) for line in lines
+                if line and canonicalize_name(Requirement(line).name) == "resvg-py"]
+    return str(found.specifier)
+
+
+def test_the_cli_draws_the_cards_with_the_card_functions_renderer() -> None:
+    assert renderer_requirement(CARD_REQUIREMENTS) == renderer_requirement(CLI_REQUIREMENTS)
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    assert all(f'"{tool}' in pyproject for tools in DEVELOPER_TOOLS.values() for tool in tools), \
+        "the developer tools' packages are in the test extra"

@@ -43,3 +43,17 @@ def test_every_requirement_of_the_functions_is_locked_within_its_range() -> None
 
 def test_the_lock_leaves_out_what_the_lambda_runtime_brings() -> None:
     assert not RUNTIME_PROVIDED & set(locked_versions())
+
+
+def test_the_card_functions_renderer_is_locked_within_its_range() -> None:
+    pins = {}
+    for line in requirement_lines(FUNCTIONS / "card-requirements.lock"):
+        name, separator, version = line.partition("==")
+        assert separator and version, f"card-requirements.lock: {line!r} is not pinned to one version"
+        pins[canonicalize_name(name)] = version
+    for line in requirement_lines(FUNCTIONS / "card-requirements.txt"):
+        requirement = Requirement(line)
+        version = pins.get(canonicalize_name(requirement.name))
+        assert version is not None, f"{requirement.name} is not in card-requirements.lock (run make lock)"
+        assert requirement.specifier.contains(version)
+    assert not set(pins) & set(locked_versions()), "the card lock adds only what the functions lack"

@@ -375,6 +375,9 @@ def test_history_spans_boards_oldest_first(service: LeaderboardService) -> None:
     ("reInvent2019_track_cw", "reInvent2019_track_cw"),
     ("reInvent2019_track_ccw", "reInvent2019_track"),
     ("Oval_track", "Oval_track"),
+    # a default board's id as a push prints it
+    ("Belille_oa", "Belille_oa"),
+    ("reInvent2019_cw_h2b", "reInvent2019_track_cw_h2b"),
 ])
 def test_board_for_track_resolves_aliases(name: str, board: str) -> None:
     assert board_for_track(name) == board

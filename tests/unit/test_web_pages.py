@@ -172,3 +172,13 @@ def test_every_table_of_the_pages_stacks_on_a_phone() -> None:
     assert html.count("<table") == html.count('<table class="standings stack"')
     index = web.index_page([board(participants=3)])
     assert index.count("<table") == index.count('<table class="stack"') == 1
+
+
+def test_the_board_page_links_every_lap_as_csv_when_its_laps_show() -> None:
+    link = '<a href="/boards/club-final/laps.csv" download>Download every lap (CSV)</a>'
+    assert link in standings(board(participants=2))
+    assert link not in standings(board(participants=2), screen=True), "not on the big screen"
+    assert link not in page_of(board()), "nothing to download on an empty board"
+    private = board(participants=2, designs="after-close")
+    assert link not in standings(private), "laps stay private with the designs until the close"
+    assert link in standings(private.model_copy(update={"status": BoardStatus.CLOSED}))

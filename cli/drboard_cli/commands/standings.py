@@ -1,4 +1,5 @@
-"""The commands that read a board: pull, boards, compare, insights, history, show and status."""
+"""The commands that read a board: pull, boards, compare, insights, history, show, status and
+card."""
 
 from __future__ import annotations
 
@@ -52,8 +53,42 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
          output: Path | None) -> None:
     """Show a board's standings: rank, time, gap to the leader and each model's design."""
     with edge():
-        page = _collect(ctx.board, _board_id(track, board), top)
+        board_id = _board_id(track, board)
+        if board:
+            page = _collect(ctx.board, board_id, top)
+        else:
+            page = _track_page(ctx.board, track or "", board_id, top)
         _emit(page, fmt, output)
+
+
+def _track_page(client: BoardClient, track: str, board_id: str, top: int) -> Any:
+    """The standings of a track's default board; when it has none, the refusal lists the
+    boards the track has (its object-avoidance or head-to-head boards, named boards)."""
+    from drboard_functions.errors import BoardNotFound
+
+    try:
+        return _collect(client, board_id, top)
+    except BoardNotFound:
+        others = _boards_of_track(client, track)
+        if not others:
+            raise
+        from ..render import plural
+
+        listing = ", ".join(f"{b.board_id} ({b.title}, {plural(b.participants, 'racer')})"
+                            for b in others[:10])
+        more = f" and {len(others) - 10} more" if len(others) > 10 else ""
+        raise BoardNotFound(f"no board {board_id!r}: no run was pushed to the track's default "
+                            f"board; its boards are {listing}{more} (use --board ID)") from None
+
+
+def _boards_of_track(client: BoardClient, track: str) -> list[Any]:
+    from drboard_assembler.catalog import UnknownTrackError, default_catalog
+
+    try:
+        track_id = default_catalog().resolve(track).track_id
+    except UnknownTrackError:
+        track_id = track.strip()
+    return sorted((b for b in client.boards() if b.track == track_id), key=lambda b: b.board_id)
 
 
 def _collect(client: BoardClient, board_id: str, top: int) -> Any:
@@ -241,3 +276,33 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
             click.echo(render.json_text(summary.model_dump_json(indent=2)))
         else:
             out().print(render.status_table(summary, out().width))
+
+
+@click.command()
+@click.argument("racer")
+@click.option("--track", help="The track whose default board to look at.")
+@click.option("--board", help="The board id to look at.")
+@click.option("--format", "fmt", type=click.Choice(["png", "svg"]), default="png", show_default=True,
+              help="png to share, or svg, the source the PNG is drawn from.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Where to save it (default: RACER-BOARD.png in this folder).")
+@pass_context
+def card(ctx: Context, racer: str, track: str | None, board: str | None, fmt: str,
+         output: Path | None) -> None:
+    """Save a racer's result card, a PNG to share (or its SVG source).
+
+    The card (1200×630) says the board, the racer's rank of how many, their time, the gap to the
+    leader and their model: the image a link to the racer's page unfurls as in a chat. The
+    embedded board draws it here; a deployed board or a `drboard serve` answers its own.
+    """
+    with edge():
+        board_id = _board_id(track, board)
+        data = ctx.board.racer_card(board_id, racer, "svg" if fmt == "svg" else "png")
+        path = output or Path(file_name(f"{racer}-{board_id}") + f".{fmt}")
+        path.write_bytes(data)
+        out().print(f"Saved {racer}'s card on {board_id} to {path}")
+
+
+def file_name(name: str) -> str:
+    """A file name anyone's system takes: letters, digits, ``-``, ``_`` and ``.`` only."""
+    return "".join(char if char.isalnum() or char in "-_." else "_" for char in name).strip(".") or "card"

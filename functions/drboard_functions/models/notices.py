@@ -46,11 +46,14 @@ WebhookUrl = Annotated[str, StringConstraints(strip_whitespace=True, min_length=
                        AfterValidator(_webhook_url)]
 
 
+TargetKind = Literal["board", "season"]
+
+
 class Target(Model):
     """What announcements are about: a board, or a season of boards (a season's webhooks hear
     its rounds' events)."""
 
-    kind: Literal["board", "season"] = "board"
+    kind: TargetKind = "board"
     target_id: Annotated[str, StringConstraints(min_length=1, max_length=128)]
 
     @property

@@ -9,6 +9,9 @@
   (``board-close``), found by looking at the boards' windows now and then (the cloud's schedule,
   `drboard serve`'s worker); a moment more than ``LOOKBACK`` ago is not announced late.
 
+A season's webhooks hear the events of its rounds' boards and of its final's, as the boards' own
+webhooks do (each webhook hears an event once).
+
 Ranks are the board's when the announcement is worked out (a few seconds after the push).
 """
 
@@ -30,10 +33,22 @@ PODIUM = 3
 BoardUrl = Callable[[str], str]
 
 
-def targets_of(board_id: str) -> list[Target]:
-    """Whose webhooks hear a board's events: the board's own (and, once seasons hold boards,
-    the seasons it is a round of)."""
-    return [Target(kind="board", target_id=board_id)]
+def targets_of(store: BoardStore, board_id: str) -> list[Target]:
+    """Whose webhooks hear a board's events: the board's own, and each season's the board is a
+    round (or the final) of."""
+    return [Target(kind="board", target_id=board_id),
+            *(Target(kind="season", target_id=link.season_id) for link in store.season_links(board_id))]
+
+
+def season_boards(store: BoardStore, season_id: str) -> list[str]:
+    """The boards whose events a season's webhooks hear: its rounds and its final."""
+    season = store.get_season(season_id)
+    if season is None:
+        return []
+    boards = [r.board_id for r in season.rounds]
+    if season.final is not None:
+        boards.append(season.final.board_id)
+    return boards
 
 
 def entry_announcement(store: BoardStore, change: EntryChange, board_url: BoardUrl) -> Announcement | None:

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 from ..models.notices import Announcement, Delivery, EntryChange, Webhook
 from ..stores.base import BoardStore
 from . import sending
-from .events import BoardUrl, entry_announcement, targets_of, window_announcements
+from .events import BoardUrl, entry_announcement, season_boards, targets_of, window_announcements
 from .messages import payload
 
 if TYPE_CHECKING:
@@ -48,14 +48,24 @@ class Notifier:
 
     def entry_changed(self, change: EntryChange) -> list[str]:
         """Announce what the change says, if anything; the failures (empty: all sent)."""
+        if not self.listened(change.board_id):
+            return []  # no one listens: no announcement to build (four reads a push, saved)
         announcement = entry_announcement(self.store, change, self.board_url)
         return self.announce(announcement) if announcement else []
 
+    def listened(self, board_id: str) -> bool:
+        """Whether any webhook hears of the board (its own, or the event's)."""
+        return any(self.store.webhooks(target.key) for target in targets_of(self.store, board_id))
+
     def check_windows(self) -> list[str]:
-        """Announce the boards' openings and closings not yet announced; the failures."""
+        """Announce the openings and closings not yet announced of the boards that have
+        webhooks, or are rounds (or finals) of seasons that have; the failures."""
         now = self.clock()
         failures: list[str] = []
-        boards = {hook.target.target_id for hook in self.store.all_webhooks() if hook.target.kind == "board"}
+        boards: set[str] = set()
+        for target in {hook.target for hook in self.store.all_webhooks()}:
+            boards |= ({target.target_id} if target.kind == "board"
+                       else set(season_boards(self.store, target.target_id)))
         for board_id in sorted(boards):
             stored = self.store.get_board(board_id)
             if stored is None or stored.board.deleted_at is not None:
@@ -66,9 +76,12 @@ class Notifier:
 
     def announce(self, announcement: Announcement) -> list[str]:
         failures = []
-        for target in targets_of(announcement.board_id):
+        for target in targets_of(self.store, announcement.board_id):
             for webhook in self.store.webhooks(target.key):
-                if announcement.kind not in webhook.events or webhook.created_at > announcement.at:
+                # A webhook hears what happens from when it was added; the stream's times are
+                # whole seconds (rounded down), so from the second it was added.
+                if (announcement.kind not in webhook.events
+                        or webhook.created_at.replace(microsecond=0) > announcement.at):
                     continue
                 error = self._deliver(webhook, announcement)
                 if error:
@@ -114,9 +127,14 @@ class NoticeWorker:
         self.thread = threading.Thread(target=self._run, name="drboard-announcements", daemon=True)
 
     def start(self) -> NoticeWorker:
-        self.service.listen(self.changes.put)
+        self.service.listen(self._heard)
         self.thread.start()
         return self
+
+    def _heard(self, change: EntryChange) -> None:
+        # Asked in the push's own thread: a change no webhook hears of wakes no one.
+        if self.notifier.listened(change.board_id):
+            self.changes.put(change)
 
     def stop(self) -> None:
         """Stop taking changes; announce those already taken, then end the thread."""

@@ -3,11 +3,14 @@
 The three Lambda functions and ``drboard serve`` build their resolver with :func:`build_app`, so
 the routes, the validation, the error statuses and the OpenAPI document are the same everywhere.
 
+- ``card_router`` (:mod:`.cards`): the result cards (SVG, and PNG drawn from it), the
+  CardFunction's in the cloud, apart so that only it ships the renderer and its fonts.
 - ``push_router`` (:mod:`.submissions`): a racer's submission and alias (IAM-signed in the
   cloud). ``pull_router``: the public reads (:mod:`.boards`) and the web pages (:mod:`.pages`).
   ``admin_router`` (:mod:`.organisers`): the organisers' routes (create, change, close, delete,
   restore, export and import boards, moderation, audit), every one IAM-signed in the cloud and
   answered by ``drboard serve`` only to the computer it runs on.
+- :mod:`.seasons`: the seasons' reads and page (pull) and their organisers' routes (admin).
 - :mod:`.params` holds what the routes share: the routers, the request parameters, who is
   calling, and each JSON body's bound; :mod:`.responses` what they answer.
 - The routes never build a service: the caller puts one in the resolver's context before each
@@ -18,7 +21,16 @@ Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerat
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
 """
 
-from . import boards, organisers, pages, results, submissions, webhooks  # noqa: F401 - each registers its routes
+from . import (  # noqa: F401 - each registers its routes
+    boards,
+    cards,
+    organisers,
+    pages,
+    results,
+    seasons,
+    submissions,
+    webhooks,
+)
 from .app import (
     COGNITO_PREFIX,
     ERROR_STATUS,
@@ -39,6 +51,7 @@ from .params import (
     RequestBody,
     admin_router,
     bounded_json,
+    card_router,
     pull_router,
     push_router,
 )
@@ -58,6 +71,7 @@ __all__ = [
     "bounded_json",
     "build_app",
     "canonical_event",
+    "card_router",
     "error_body",
     "error_headers",
     "openapi_document",

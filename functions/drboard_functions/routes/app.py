@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import base64
 import binascii
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from http import HTTPStatus
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, cast, get_type_hints
 
 from aws_lambda_powertools.event_handler import (
     APIGatewayHttpResolver,
     CORSConfig,
+    Depends,
     Response,
     content_types,
 )
@@ -55,8 +56,12 @@ from ..errors import (
     InvalidQuery,
     InvalidSubmission,
     NotAuthorized,
+    NotQualified,
     NotSignedIn,
     RacerNotFound,
+    SeasonExists,
+    SeasonLocked,
+    SeasonNotFound,
     StoreBusy,
     StoreError,
     StoreFailed,
@@ -69,8 +74,10 @@ from ..errors import (
     WebhookNotFound,
 )
 from ..identity import caller_from_event
+from ..service import LeaderboardService
 from .params import ADMIN_TAG, SIGV4, RequestBody, bounded_json, route_body
-from .responses import ErrorBody, api_version, page_answer
+from .responses import PUBLIC_CACHE, ErrorBody, api_version, body_etag, names_etag, page_answer
+from .standings import answer, origin_of, standings_of, wanted
 
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
@@ -110,6 +117,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (SubmissionTooLarge, HTTPStatus.REQUEST_ENTITY_TOO_LARGE),
     (BoardNotFound, HTTPStatus.NOT_FOUND),
     (RacerNotFound, HTTPStatus.NOT_FOUND),
+    (SeasonNotFound, HTTPStatus.NOT_FOUND),
     (WebhookNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
     (UnreadableBody, HTTPStatus.BAD_REQUEST),
@@ -121,10 +129,13 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (NotSignedIn, HTTPStatus.UNAUTHORIZED),
     (AliasTaken, HTTPStatus.FORBIDDEN),
     (Banned, HTTPStatus.FORBIDDEN),
+    (NotQualified, HTTPStatus.FORBIDDEN),
     (NotAuthorized, HTTPStatus.FORBIDDEN),
     (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
+    (SeasonExists, HTTPStatus.CONFLICT),
+    (SeasonLocked, HTTPStatus.CONFLICT),
     (StoreFailed, HTTPStatus.BAD_GATEWAY),
     (StoreBusy, HTTPStatus.SERVICE_UNAVAILABLE),
     (StoreUnavailable, HTTPStatus.SERVICE_UNAVAILABLE),
@@ -239,15 +250,60 @@ class BoardResolver(APIGatewayHttpResolver):
     as what its headers say is refused before any route or parser sees it (Powertools would
     raise on some of them: a multipart type without a boundary, base64 that does not decode).
     An organiser route refuses a caller who does not organise before it validates anything, so
-    a racer learns nothing of its body's fields (403, not 422)."""
+    a racer learns nothing of its body's fields (403, not 422).
+
+    A board's top page whose copy is kept for the board's version now is answered before any of
+    that (see :mod:`.standings`): one read of the version, and the copy's bytes. Every public
+    read's answer (a GET route that is neither signed nor an organiser's) carries the CDN's
+    Cache-Control and an ETag, and answers 304 to an If-None-Match naming it."""
+
+    _public_read = False
 
     def resolve(self, event: Mapping[str, Any], context: LambdaContext) -> dict[str, Any]:
+        kept = self._kept_answer(event)
+        if kept is not None:
+            self.clear_context()
+            return kept
         problem = unreadable(event)
         if problem is not None:
             return refusal(problem)
-        return super().resolve(event, context)
+        self._public_read = False
+        answer = super().resolve(event, context)
+        if self._public_read:
+            return public_answer(answer, (event.get("headers") or {}).get("if-none-match"))
+        return answer
+
+    def _kept_answer(self, event: Mapping[str, Any]) -> dict[str, Any] | None:
+        """A kept copy's answer to the request, if it asks for one that is kept and current."""
+        if event.get("body"):
+            return None
+        method = ((event.get("requestContext") or {}).get("http") or {}).get("method", "")
+        page = wanted(method, str(event.get("rawPath") or ""), str(event.get("rawQueryString") or ""))
+        service = self.context.get("service")
+        if page is None or not isinstance(service, LeaderboardService):
+            return None
+        headers: Mapping[str, str] = event.get("headers") or {}
+        invite = self._invite(event) if page.html else None
+        copy = standings_of(service).kept(page, invite)
+        if copy is None:
+            return None
+        kept = answer(copy, headers.get("if-none-match"))
+        origin = headers.get("origin")
+        return {"statusCode": int(kept.status), "body": kept.text, "isBase64Encoded": False,
+                "headers": kept.headers | CORS.to_dict(CORS.allowed_origin(origin)) if origin
+                else kept.headers, "cookies": []}
+
+    def _invite(self, event: Mapping[str, Any]) -> web.Invite:
+        given = self.context.get("invite")
+        invite = given() if callable(given) else None
+        if isinstance(invite, web.Invite):
+            return invite
+        return web.Invite(endpoint=origin_of(event.get("headers") or {},
+                                             (event.get("requestContext") or {}).get("domainName")))
 
     def _call_route(self, route: Any, route_arguments: dict[str, str]) -> Any:
+        self._public_read = (route.method == "GET" and not route.security
+                             and ADMIN_TAG not in (route.tags or ()))
         if ADMIN_TAG in (route.tags or ()):
             caller = caller_from_event(self.current_event.raw_event)
             if caller is None or not caller.organiser:
@@ -256,6 +312,23 @@ class BoardResolver(APIGatewayHttpResolver):
                 if handled is not None:
                     return handled
         return super()._call_route(route, route_arguments)
+
+
+def public_answer(answer: dict[str, Any], if_none_match: str | None) -> dict[str, Any]:
+    """A public read's answer as a CDN may keep it: a 200 gets an ETag (its body's digest when
+    the route gave none) and becomes 304 when the client already holds it; a 200 or 304 gets
+    the public Cache-Control. An error stays as it is (never kept)."""
+    status = int(answer.get("statusCode", 200))
+    if status not in (HTTPStatus.OK, HTTPStatus.NOT_MODIFIED):
+        return answer
+    headers = dict(answer.get("headers") or {})
+    headers["Cache-Control"] = PUBLIC_CACHE
+    if status == HTTPStatus.OK:
+        etag = headers.setdefault("ETag", body_etag(str(answer.get("body") or "")))
+        if names_etag(if_none_match, etag):
+            return {**answer, "statusCode": int(HTTPStatus.NOT_MODIFIED), "body": "",
+                    "isBase64Encoded": False, "headers": headers}
+    return {**answer, "headers": headers}
 
 
 def unreadable(event: Mapping[str, Any]) -> DomainError | None:
@@ -291,6 +364,23 @@ def refusal(error: DomainError) -> dict[str, Any]:
 
 
 
+def settle_annotations(func: Callable[..., Any]) -> None:
+    """Evaluate a route's annotations (and its dependencies') once, here: Powertools reads a
+    route's type hints, and its dependencies', on every request, and with postponed annotations
+    each read compiled every one of them again (about a millisecond of every request)."""
+    hints = getattr(func, "__annotations__", None) or {}
+    if any(isinstance(hint, str) for hint in hints.values()):
+        hints = func.__annotations__ = get_type_hints(func, include_extras=True)
+    for hint in hints.values():
+        for meta in getattr(hint, "__metadata__", ()):
+            if isinstance(meta, Depends):
+                settle_annotations(meta.dependency)
+
+
+#: The reads' CORS headers (the signed routes set ``cors=False``); answered by kept copies too.
+CORS = CORSConfig(allow_origin="*", allow_headers=["Content-Type"], max_age=600)
+
+
 def build_app(*routers: Router) -> BoardResolver:
     """A resolver with these routers, validation, CORS for the reads, and the error statuses.
 
@@ -302,13 +392,15 @@ def build_app(*routers: Router) -> BoardResolver:
         return bounded_json(body, route_body(app))
 
     app = BoardResolver(
-        cors=CORSConfig(allow_origin="*", allow_headers=["Content-Type"], max_age=600),
+        cors=CORS,
         enable_validation=True,
         response_validation_error_http_code=HTTPStatus.INTERNAL_SERVER_ERROR,
         json_body_deserializer=parse_body,
     )
     for router in routers:
         app.include_router(router)
+    for route in app._static_routes + app._dynamic_routes:
+        settle_annotations(route.func)
     _register_error_handlers(app)
     app.configure_openapi(
         title=TITLE,
@@ -317,7 +409,7 @@ def build_app(*routers: Router) -> BoardResolver:
         description="Push a model's evaluation as a record; read the standings, each racer's "
                     "history and how the fast models were built. Reads are public; submissions "
                     "and the organisers' routes (tag `admin`) are signed with SigV4 (IAM).",
-        tags=["submissions", "boards", "racers", ADMIN_TAG, "pages"],
+        tags=["submissions", "boards", "racers", "seasons", ADMIN_TAG, "pages", "results", "cards"],
         # Plain data, which Powertools validates as an APIKey when it builds the document: its
         # OpenAPI models cost a cold start ~40 ms to import, for a document the functions never
         # serve. (No servers: Powertools' default is the same single "/".)

@@ -30,7 +30,8 @@ from .params import (
     pull_router,
     segment,
 )
-from .responses import BAD_PATH, error_response, etag_headers, json_response, page_etag
+from .responses import BAD_PATH, error_response, etag_headers, json_response, names_etag, page_etag
+from .standings import Wanted, answer, standings_of
 
 
 @pull_router.get(
@@ -54,7 +55,8 @@ def list_boards(service: Service, limit: Limit = DEFAULT_LIMIT, cursor: Cursor =
                 "`next_cursor` as `cursor` for the next page. The answer's `ETag` changes with "
                 "the standings: send it back as `If-None-Match` and an unchanged board answers "
                 "`304 Not Modified` with no body, after a single read (a screen can poll every "
-                "few seconds).",
+                "few seconds). Like every public read, it carries `Cache-Control: public, "
+                "max-age=2, stale-while-revalidate=2`: a CDN or a browser may keep it two seconds.",
     tags=["boards"],
     responses={200: json_response("The board and one page of its entries.", BoardPage),
                304: {"description": "Unchanged since the `ETag` sent in `If-None-Match`."},
@@ -64,13 +66,18 @@ def list_boards(service: Service, limit: Limit = DEFAULT_LIMIT, cursor: Cursor =
 def get_board(board: BoardId, service: Service, limit: Limit = DEFAULT_LIMIT,
               cursor: Cursor = None, if_none_match: IfNoneMatch = None) -> Response[Any]:
     board_id = segment(board)
+    if not cursor:  # the top page: kept as bytes, rendered once per board version
+        kept = answer(standings_of(service).copy(Wanted(board_id, "json", limit)), if_none_match)
+        return Response(status_code=int(kept.status), content_type=None, body=kept.text,
+                        headers=kept.headers)
     if if_none_match:
         etag = page_etag(service.board_tag(board_id), limit, cursor)
-        if etag in (tag.strip() for tag in if_none_match.split(",")):
+        if names_etag(if_none_match, etag):
             return Response(status_code=HTTPStatus.NOT_MODIFIED, body="", headers=etag_headers(etag))
-    page = service.board_page(board_id, limit=limit, cursor=cursor or None)
+    page = service.board_page(board_id, limit=limit, cursor=cursor)
     return Response(status_code=HTTPStatus.OK, content_type=content_types.APPLICATION_JSON,
-                    body=page, headers=etag_headers(page_etag(page_tag(page.board), limit, cursor)))
+                    body=page.model_dump_json(),
+                    headers=etag_headers(page_etag(page_tag(page.board), limit, cursor)))
 
 
 @pull_router.get(

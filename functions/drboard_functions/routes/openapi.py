@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from .app import build_app
-from .params import admin_router, pull_router, push_router
+from .params import admin_router, card_router, pull_router, push_router
 
 _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
 #: Every route's answer when the board's storage is busy or unreachable (nothing was written).
@@ -19,14 +19,16 @@ _STORE_BUSY = {
 
 
 def openapi_document() -> str:
-    """The OpenAPI document of the three functions' routes, as committed in functions/openapi.json.
+    """The OpenAPI document of the functions' routes, as committed in functions/openapi.json.
 
-    It is Powertools' document for ``build_app(push_router, pull_router, admin_router)`` plus the
+    It is Powertools' document for ``build_app(push_router, pull_router, admin_router,
+    card_router)`` plus the
     503 every route may answer (a busy store), less one thing that is not true of this API: the
     default "422 Validation Error" Powertools lists on every validated route. Here a bad query
     or path parameter answers 400 and a bad body 422, both with an :class:`ErrorBody`, and the
     routes list those responses themselves."""
-    document = json.loads(build_app(push_router, pull_router, admin_router).get_openapi_json_schema())
+    document = json.loads(build_app(push_router, pull_router, admin_router,
+                                    card_router).get_openapi_json_schema())
     for operations in document["paths"].values():
         for operation in operations.values():
             operation["responses"]["503"] = _STORE_BUSY

@@ -31,7 +31,16 @@ from .params import (
     pull_router,
     segment,
 )
-from .responses import PAGE_RESPONSE, error_response, etag_headers, page_answer, page_etag, page_policy
+from .responses import (
+    PAGE_RESPONSE,
+    error_response,
+    etag_headers,
+    names_etag,
+    page_answer,
+    page_etag,
+    page_policy,
+)
+from .standings import Kind, Wanted, answer, origin_of, standings_of
 
 
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],
@@ -53,24 +62,28 @@ def board_view(board: BoardId, service: Service, request: Request, limit: Limit 
     board_id = segment(board)
     if screen and limit == DEFAULT_LIMIT:
         limit = MAX_PAGE  # the big screen scrolls through the whole board
-    view = "screen" if screen else "view"
+    view: Kind = "screen" if screen else "view"
+    invite = _invite(request)
     try:
+        if not cursor:  # the top page: kept as bytes, rendered once per board version
+            kept = answer(standings_of(service).copy(Wanted(board_id, view, limit), invite),
+                          if_none_match)
+            return Response(status_code=int(kept.status), content_type=None, body=kept.text,
+                            headers=kept.headers)
         if if_none_match:
             etag = page_etag(f"{view}.{service.board_tag(board_id)}", limit, cursor)
-            if etag in (tag.strip() for tag in if_none_match.split(",")):
+            if names_etag(if_none_match, etag):
                 return page_answer("", HTTPStatus.NOT_MODIFIED, etag_headers(etag))
-        page = service.board_page(board_id, limit=limit, cursor=cursor or None)
+        page = service.board_page(board_id, limit=limit, cursor=cursor)
     except BoardNotFound:  # a screen set up before the first push waits for the board
-        invite = _invite(request)
         return page_answer(web.waiting_page(board_id, screen, join_code=invite.code,
                                             endpoint=invite.endpoint),
                            HTTPStatus.NOT_FOUND, page_policy(live=True))
     etag = page_etag(f"{view}.{page_tag(page.board)}", limit, cursor)
-    invite = _invite(request)
     url = invite.join_url if invite.code else invite.endpoint + web.board_path(board_id)
     html = web.board_page(page, etag, screen=screen, now=service.clock(), url=url,
                           endpoint=invite.endpoint, qr_svg=web.qr_svg(url) if screen else "",
-                          join_code=invite.code)
+                          join_code=invite.code, seasons=service.board_seasons(board_id))
     return page_answer(html, headers=page_policy(live=True) | etag_headers(etag))
 
 
@@ -86,11 +99,7 @@ def _invite(request: Request) -> web.Invite:
 
 
 def _origin(event: Any) -> str:
-    headers = event.headers or {}
-    context = event.raw_event.get("requestContext") or {}
-    host = headers.get("host") or context.get("domainName") or "localhost"
-    scheme = headers.get("x-forwarded-proto", "http").split(",")[0].strip()
-    return f"{scheme}://{host}"
+    return origin_of(event.headers or {}, (event.raw_event.get("requestContext") or {}).get("domainName"))
 
 
 @pull_router.get(
@@ -99,7 +108,7 @@ def _origin(event: Any) -> str:
     tags=["pages"],
     responses={200: PAGE_RESPONSE, 404: error_response("No such board or racer.")},
 )
-def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[str]:
+def racer_view(board: BoardId, racer: RacerAlias, service: Service, request: Request) -> Response[str]:
     view = service.racer(segment(board), segment(racer), MAX_PAGE)
     leader = ahead = None
     if view.entry.rank > 1 and view.record is not None:
@@ -108,7 +117,8 @@ def racer_view(board: BoardId, racer: RacerAlias, service: Service) -> Response[
                                    cursor=None).entries
         leader = above[0].racer if above else None
         ahead = above[-1].racer if above and view.entry.rank - 1 <= MAX_PAGE else None
-    return page_answer(web.racer_page(view, leader=leader, ahead=ahead))
+    return page_answer(web.racer_page(view, leader=leader, ahead=ahead,
+                                      origin=_invite(request).endpoint))
 
 
 @pull_router.get(

@@ -46,11 +46,12 @@ SIGV4 = "sigv4"
 #: The tag of every organiser route: IAM-signed in the cloud, loopback only on `drboard serve`.
 ADMIN_TAG = "admin"
 
-#: The push function's routes (:mod:`.submissions`), the pull function's (:mod:`.boards`, :mod:`.pages`)
-#: and the admin function's (:mod:`.organisers`).
+#: The push function's routes (:mod:`.submissions`), the pull function's (:mod:`.boards`, :mod:`.pages`),
+#: the admin function's (:mod:`.organisers`) and the card function's (:mod:`.cards`).
 push_router = Router()
 pull_router = Router()
 admin_router = Router()
+card_router = Router()
 
 # ---- request parameters ------------------------------------------------------------------------
 

@@ -100,5 +100,24 @@ def page_etag(tag: str, limit: int, cursor: str | None) -> str:
     return f'"{api_version()}.{tag}.{query}"'
 
 
+#: The Cache-Control of every public read's answer (and of no signed or organiser one): a CDN or
+#: a browser may keep it two seconds, and answer it two more while it asks again, so a page that
+#: changes with every push is at most a few seconds behind; errors are never kept. Viewers who
+#: poll every two seconds cost the board one request per CDN location per two seconds.
+PUBLIC_CACHE = "public, max-age=2, stale-while-revalidate=2"
+
+
 def etag_headers(etag: str) -> dict[str, str]:
-    return {"ETag": etag, "Cache-Control": "no-cache"}
+    return {"ETag": etag, "Cache-Control": PUBLIC_CACHE}
+
+
+def body_etag(body: str) -> str:
+    """The ETag of a public answer that has none of its own: its body's digest."""
+    return '"' + hashlib.sha256(body.encode("utf-8")).hexdigest()[:24] + '"'
+
+
+def names_etag(if_none_match: str | None, etag: str) -> bool:
+    """Whether an If-None-Match names the ETag (weakly: a CDN that compresses an answer hands its
+    ETag on as ``W/"..."``)."""
+    return bool(if_none_match) and any(
+        tag.strip().removeprefix("W/") == etag for tag in str(if_none_match).split(","))

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from http import HTTPStatus
-from typing import Annotated
+from typing import Annotated, Any
 
-from aws_lambda_powertools.event_handler import Response
+from aws_lambda_powertools.event_handler import Response, content_types
 from aws_lambda_powertools.event_handler.openapi.params import Body
 from drboard_assembler import limits
 from drboard_assembler.record import Record
@@ -13,7 +13,7 @@ from drboard_assembler.record import Record
 from ..models.requests import AliasRequest
 from ..models.views import Me, PushAccepted, PushReceipt
 from .params import ALIAS_BODY, RECORD_BODY, SIGV4, BoardId, Service, SignedIn, push_router, segment, takes
-from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_answer, json_response
+from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_response
 
 
 @push_router.post(
@@ -59,11 +59,16 @@ def submit(
     record: Annotated[Record, Body(description="The record `drboard assemble` builds.")],
     service: Service,
     caller: SignedIn,
-) -> Response[PushReceipt | PushAccepted]:
+) -> Response[Any]:
+    # Encoded once, here: the receipt's model is the service's own, so no response validation
+    # or second serialisation (the statuses' schemas are documented in `responses` above).
     receipt = service.push(record, segment(board), caller=caller)
     if isinstance(receipt, PushAccepted):
-        return json_answer(HTTPStatus.ACCEPTED, receipt)
-    return json_answer(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
+        status = HTTPStatus.ACCEPTED
+    else:
+        status = HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK
+    return Response(status_code=int(status), content_type=content_types.APPLICATION_JSON,
+                    body=receipt.model_dump_json())
 
 
 # ---- the signed-in caller -------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 """The organisers' webhooks (IAM-signed in the cloud; answered by `drboard serve` only to the
-computer it runs on): add, list, remove and test a board's chat webhooks. A webhook's URL is
-taken in a body and never answered back in full."""
+computer it runs on): add, list, remove and test a board's chat webhooks, and a season's (which
+hear its rounds' and its final's events). A webhook's URL is taken in a body and never answered
+back in full."""
 
 from __future__ import annotations
 
@@ -12,15 +13,18 @@ from aws_lambda_powertools.event_handler.openapi.params import Body, Path
 
 from ..errors import InvalidQuery
 from ..models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
-from ..web import board_path
+from ..web import board_path, season_path
 from .organisers import _ADMIN, _NO_BOARD, _admin_responses
 from .pages import _origin
 from .params import BoardId, Organiser, RequestBody, Service, admin_router, segment, takes
 from .responses import json_answer, json_response
+from .seasons import SeasonId
 
 WEBHOOK_BODY = RequestBody("webhook", 4096, InvalidQuery)
 WebhookId = Annotated[str, Path(min_length=1, max_length=64, description="The webhook's id.")]
 _NO_WEBHOOK = "No such board, or no such webhook on it (`WebhookNotFound`)."
+_NO_SEASON = "No such season (`SeasonNotFound`)."
+_NO_SEASON_WEBHOOK = "No such season, or no such webhook of it (`WebhookNotFound`)."
 
 
 @admin_router.post(
@@ -83,3 +87,67 @@ def test_webhook(board: BoardId, webhook: WebhookId, service: Service, organiser
     board_id = segment(board)
     url = _origin(request.resolved_event) + board_path(board_id)
     return service.test_webhook(board_id, segment(webhook), url)
+
+
+# ---- a season's webhooks: its rounds' and its final's events ----------------------------------
+
+
+@admin_router.post(
+    "/seasons/<season>/webhooks",
+    status_code=HTTPStatus.CREATED,
+    summary="Add a chat webhook to a season",
+    description="Announcements of every round of the season and of its final go to it, as a "
+                "board's own webhooks hear them (`events`, every one by default; `kind` as for a "
+                "board). The URL is a secret: the answer shows its host and last four characters.",
+    responses=_admin_responses(
+        json_response("The webhook was added.", WebhookView), ok_status=HTTPStatus.CREATED,
+        body=WEBHOOK_BODY, errors={400: "A bad season id, or the season has 10 webhooks already.",
+                                   404: _NO_SEASON}),
+    **_ADMIN,
+)
+@takes(WEBHOOK_BODY)
+def add_season_webhook(season: SeasonId, spec: Annotated[WebhookSpec, Body(description="The webhook.")],
+                       service: Service, organiser: Organiser) -> Response[WebhookView]:
+    view = service.add_webhook(segment(season), spec, caller=organiser, kind="season")
+    return json_answer(HTTPStatus.CREATED, view)
+
+
+@admin_router.get(
+    "/seasons/<season>/webhooks",
+    summary="A season's chat webhooks",
+    description="Each webhook with its URL cut short, the events it hears, and how its last "
+                "delivery went.",
+    responses=_admin_responses(json_response("The season's webhooks.", WebhookList),
+                               errors={404: _NO_SEASON}),
+    **_ADMIN,
+)
+def list_season_webhooks(season: SeasonId, service: Service, organiser: Organiser) -> WebhookList:
+    return service.webhooks(segment(season), kind="season")
+
+
+@admin_router.delete(
+    "/seasons/<season>/webhooks/<webhook>",
+    summary="Remove a season's chat webhook",
+    responses=_admin_responses(json_response("The removed webhook.", WebhookView),
+                               errors={404: _NO_SEASON_WEBHOOK}),
+    **_ADMIN,
+)
+def remove_season_webhook(season: SeasonId, webhook: WebhookId, service: Service,
+                          organiser: Organiser) -> WebhookView:
+    return service.remove_webhook(segment(season), segment(webhook), caller=organiser, kind="season")
+
+
+@admin_router.post(
+    "/seasons/<season>/webhooks/<webhook>/test",
+    summary="Send a test message to a season's chat webhook",
+    description="Posts a test message now and answers whether the service took it; the "
+                "webhook's `last_error` says why not.",
+    responses=_admin_responses(json_response("What the test did.", Delivery),
+                               errors={404: _NO_SEASON_WEBHOOK}),
+    **_ADMIN,
+)
+def test_season_webhook(season: SeasonId, webhook: WebhookId, service: Service, organiser: Organiser,
+                        request: Request) -> Delivery:
+    season_id = segment(season)
+    url = _origin(request.resolved_event) + season_path(season_id)
+    return service.test_webhook(season_id, segment(webhook), url, kind="season")

@@ -6,8 +6,9 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
 trail's reading), ``transfer`` (export, import and a board's recheck), ``aliases`` (the
-organisers' hand on racers' aliases), ``results`` (laps to analyse) and ``webhooks`` (the chat's
-announcements); ``copies`` holds the rules of copied runs.
+organisers' hand on racers' aliases), ``results`` (laps to analyse), ``webhooks`` (the chat's
+announcements), ``seasons`` (boards added up into a season's standings, and its final) and
+``sharing`` (result cards); ``copies`` holds the rules of copied runs.
 :class:`LeaderboardService` only hands each call to the room that answers it.
 """
 
@@ -36,6 +37,8 @@ from .paging import DEFAULT_PAGE
 from .pushing import Pushing, check_record_size, scored_write
 from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
 from .results import LAPS_PAGE, Results
+from .seasons import Seasons
+from .sharing import Sharing
 from .transfer import Transfer
 from .webhooks import Webhooks
 
@@ -76,9 +79,11 @@ class LeaderboardService:
         self._managing = Managing(keeper)
         self._moderating = Moderating(keeper)
         self._transfer = Transfer(keeper, archive)
+        self._seasons = Seasons(keeper)
         self._aliases = Aliases(keeper)
         self._results = Results(keeper)
         self._webhooks = Webhooks(keeper)
+        self._sharing = Sharing(self._reading, self._seasons, clock)
         self._keeper = keeper
 
     push = _handed_to("_pushing", Pushing.push)
@@ -89,6 +94,7 @@ class LeaderboardService:
     boards_page = _handed_to("_reading", Reading.boards_page)
     board_page = _handed_to("_reading", Reading.board_page)
     board_tag = _handed_to("_reading", Reading.board_tag)
+    board_version = _handed_to("_reading", Reading.board_version)
     racer = _handed_to("_reading", Reading.racer)
     compare = _handed_to("_reading", Reading.compare)
     insights = _handed_to("_reading", Reading.insights)
@@ -120,8 +126,25 @@ class LeaderboardService:
     aliases = _handed_to("_aliases", Aliases.aliases)
     alias_audit = _handed_to("_aliases", Aliases.alias_audit)
 
+    create_season = _handed_to("_seasons", Seasons.create_season)
+    update_season = _handed_to("_seasons", Seasons.update_season)
+    add_round = _handed_to("_seasons", Seasons.add_round)
+    remove_round = _handed_to("_seasons", Seasons.remove_round)
+    set_final = _handed_to("_seasons", Seasons.set_final)
+    clear_final = _handed_to("_seasons", Seasons.clear_final)
+    close_season = _handed_to("_seasons", Seasons.close_season)
+    reopen_season = _handed_to("_seasons", Seasons.reopen_season)
+    seasons = _handed_to("_seasons", Seasons.seasons)
+    seasons_page = _handed_to("_seasons", Seasons.seasons_page)
+    season = _handed_to("_seasons", Seasons.season)
+    board_seasons = _handed_to("_seasons", Seasons.board_seasons)
     laps_page = _handed_to("_results", Results.laps_page)
     run_laps = _handed_to("_results", Results.run_laps)
+
+    racer_card_svg = _handed_to("_sharing", Sharing.racer_card_svg)
+    racer_card = _handed_to("_sharing", Sharing.racer_card)
+    season_card_svg = _handed_to("_sharing", Sharing.season_card_svg)
+    season_card = _handed_to("_sharing", Sharing.season_card)
 
     add_webhook = _handed_to("_webhooks", Webhooks.add_webhook)
     webhooks = _handed_to("_webhooks", Webhooks.webhooks)

@@ -16,6 +16,7 @@ from drboard_assembler.record import RaceType, Record
 from pydantic import ValidationError
 
 from .. import display, ranking
+from ..conditions import meets, unmet
 from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
 from ..identity import Caller
 from ..models.domain import AuditAction, AuditEvent, Board, BoardRules, BoardStatus, Entry, run_mismatches
@@ -48,8 +49,8 @@ _RACE_TITLE = {
 #: can take neither an official track's board id nor a named board's (which may not start so).
 CUSTOM_PREFIX = "custom."
 
-LOCKED = ("{!r} has entries: its track, timing method, minimum laps and flagged-run rule can no "
-          "longer change "
+LOCKED = ("{!r} has entries: its track, timing method, minimum laps, flagged-run rule and required "
+          "conditions can no longer change "
           "(create a new board, or export it and import into one with the new rules)")
 
 EVENT_ID = re.compile(r"^[0-9T:.Z-]{27}-[0-9a-f]{8}$")
@@ -74,15 +75,31 @@ def default_board_id(track: str, direction: str | None, race_type: RaceType) -> 
 def board_for_track(name: str, race_type: RaceType = RaceType.TIME_TRIAL,
                     clockwise: bool = False) -> str:
     """The default board of a track given by any of its names (``reInvent2019``, ``Smile
-    Speedway``, ``reInvent2019_track_cw``). An unknown name is taken as a custom track's id."""
+    Speedway``, ``reInvent2019_track_cw``), or by the id of one of its default boards as a push
+    prints it (``Belille_oa``). An unknown name is taken as a custom track's id."""
     try:
         resolved = default_catalog().resolve(name)
     except UnknownTrackError as error:
+        if race_type is RaceType.TIME_TRIAL and (board := _named_by_board_id(name.strip())):
+            return board
         if error.ambiguous or error.candidates:
             raise InvalidQuery(str(error)) from None
         return default_board_id(name.strip(), "cw" if clockwise else None, race_type)
     direction = "cw" if clockwise else resolved.direction
     return default_board_id(resolved.track_id, direction, race_type)
+
+
+def _named_by_board_id(name: str) -> str | None:
+    """The default board a name ending in a race type's suffix (``_oa``, ``_h2b``, …) names, if
+    the rest of it is a track's name."""
+    for race_type, suffix in _RACE_SUFFIX.items():
+        if suffix and name.endswith(suffix) and len(name) > len(suffix):
+            try:
+                resolved = default_catalog().resolve(name[: -len(suffix)])
+            except UnknownTrackError:
+                return None
+            return default_board_id(resolved.track_id, resolved.direction, race_type)
+    return None
 
 
 def is_default_board_id(board_id: str) -> bool:
@@ -155,6 +172,10 @@ def check_belongs(record: Record, board: Board) -> None:
     }
     problems = [problem[field] for field in
                 run_mismatches(record.track, record.direction, record.race_type, board)]
+    required = board.rules.conditions
+    if not any(meets(required, run) for run in record.evaluations):
+        problems.append("its evaluation ran under other conditions: "
+                        + ", ".join(unmet(required, record.best_run.conditions)))
     if problems:
         raise BoardMismatch(f"this run does not belong on {board.board_id!r}: "
                             + "; ".join(problems))

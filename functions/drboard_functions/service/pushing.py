@@ -60,6 +60,7 @@ from ..stores.base import (
 from ..views import design_of, entry_view, history_item
 from .boards import BoardKeeper, check_open, racer_key
 from .copies import Verdict, judge, run_prints
+from .seasons import check_entrant
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
 #: How many times a push is checked again when the board's settings change under it.
@@ -86,13 +87,15 @@ class Pushing:
                               "`drboard join CODE` for a `drboard serve` board")
         now = self.keeper.clock()
         claim = self._new_claim(caller, record.racer, now)
-        board_id = self.keeper.for_record(record, board_id, now).board.board_id
+        found = self.keeper.for_record(record, board_id, now)
+        board_id = found.board.board_id
         key = racer_key(record.racer)
         prints = run_prints(record)
         skeleton = confusable_skeleton(record.racer)
         archived = False
-        for _ in range(SETTINGS_ATTEMPTS):
-            stored_board = self.keeper.require(board_id)
+        for attempt in range(SETTINGS_ATTEMPTS):
+            # The board as just read for the first check; read again when it changed meanwhile.
+            stored_board = found if attempt == 0 else self.keeper.require(board_id)
             board = stored_board.board
             bans, bans_version = self.store.event_bans()
             check_not_banned(board, bans, record.racer, caller)
@@ -100,6 +103,7 @@ class Pushing:
             if stored is not None:
                 return self._duplicate_receipt(stored, record.racer)
             check_open(board, now)
+            check_entrant(self.keeper, board_id, record.racer)
             self._check_limits(board, key, record.racer, now)
             verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
             submission, entry = scored_write(record, board, now, verdict.flags)

@@ -1,17 +1,19 @@
-"""Organisers' webhooks: add, list, remove and test the chat webhooks of a board (and, once
-seasons hold boards, of a season). What is announced, and how, is :mod:`..notify`'s."""
+"""Organisers' webhooks: add, list, remove and test the chat webhooks of a board, or of a season
+(``kind="season"``: they hear its rounds' and its final's events). What is announced, and how,
+is :mod:`..notify`'s. Changes to a board's webhooks go in its audit trail (a season has none)."""
 
 from __future__ import annotations
 
 import secrets
 
-from ..errors import InvalidQuery, WebhookNotFound
+from ..errors import InvalidQuery, SeasonNotFound, WebhookNotFound
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.notices import (
     MAX_WEBHOOKS,
     Announcement,
     Delivery,
     Target,
+    TargetKind,
     Webhook,
     WebhookList,
     WebhookSpec,
@@ -31,56 +33,70 @@ class Webhooks:
         #: How messages are posted (tests give a fake).
         self.post: sending.Post = sending.post
 
-    def add_webhook(self, board_id: str, spec: WebhookSpec,
-                    caller: Caller = LOCAL_ORGANISER) -> WebhookView:
-        """Add a webhook to the board: its events are posted to it from now on."""
-        target = self._board(board_id)
+    def add_webhook(self, target_id: str, spec: WebhookSpec, caller: Caller = LOCAL_ORGANISER,
+                    kind: TargetKind = "board") -> WebhookView:
+        """Add a webhook to the board (or season): its events are posted to it from now on."""
+        target = self._target(kind, target_id)
         if len(self.store.webhooks(target.key)) >= MAX_WEBHOOKS:
-            raise InvalidQuery(f"{board_id!r} has {MAX_WEBHOOKS} webhooks, the most a board may "
+            raise InvalidQuery(f"{target_id!r} has {MAX_WEBHOOKS} webhooks, the most a {kind} may "
                                "have: remove one first")
         webhook = Webhook(webhook_id=secrets.token_hex(4), target=target, kind=spec.kind,
                           url=spec.url, events=list(dict.fromkeys(spec.events)),
                           created_at=self.keeper.clock())
         self.store.put_webhook(webhook)
         view = webhook.view()
-        self.keeper.audit(board_id, "webhook-add", caller,
-                          detail=f"{view.kind} webhook {view.webhook_id} ({view.url})")
+        if kind == "board":
+            self.keeper.audit(target_id, "webhook-add", caller,
+                              detail=f"{view.kind} webhook {view.webhook_id} ({view.url})")
         return view
 
-    def webhooks(self, board_id: str) -> WebhookList:
-        """The board's webhooks, their URLs cut short, with how their last delivery went."""
-        target = self._board(board_id)
+    def webhooks(self, target_id: str, kind: TargetKind = "board") -> WebhookList:
+        """The board's (or season's) webhooks, their URLs cut short, with how their last
+        delivery went."""
+        target = self._target(kind, target_id)
         return WebhookList(target=target, webhooks=[w.view() for w in self.store.webhooks(target.key)])
 
-    def remove_webhook(self, board_id: str, webhook_id: str,
-                       caller: Caller = LOCAL_ORGANISER) -> WebhookView:
-        target = self._board(board_id)
+    def remove_webhook(self, target_id: str, webhook_id: str, caller: Caller = LOCAL_ORGANISER,
+                       kind: TargetKind = "board") -> WebhookView:
+        target = self._target(kind, target_id)
         removed = self.store.delete_webhook(target.key, webhook_id)
         if removed is None:
-            raise WebhookNotFound(f"{board_id!r} has no webhook {webhook_id!r} "
-                                  f"(see `drboard board webhook list {board_id}`)")
-        self.keeper.audit(board_id, "webhook-remove", caller, detail=f"{removed.kind} webhook {webhook_id}")
+            raise WebhookNotFound(f"{target_id!r} has no webhook {webhook_id!r} "
+                                  f"(see `drboard {kind} webhook list {target_id}`)")
+        if kind == "board":
+            self.keeper.audit(target_id, "webhook-remove", caller,
+                              detail=f"{removed.kind} webhook {webhook_id}")
         return removed.view()
 
-    def test_webhook(self, board_id: str, webhook_id: str, board_url: str | None = None) -> Delivery:
-        """Post a test message to the webhook now (the board's podium as it stands), and note
-        how it went on it. ``board_url`` is the board's page (its path when the board has no
-        address of its own, as the embedded board)."""
-        from ..web import board_path
+    def test_webhook(self, target_id: str, webhook_id: str, board_url: str | None = None,
+                     kind: TargetKind = "board") -> Delivery:
+        """Post a test message to the webhook now (a board's podium as it stands), and note how
+        it went on it. ``board_url`` is the board's (or season's) page (its path when the board
+        has no address of its own, as the embedded board)."""
+        from ..web import board_path, season_path
 
-        stored = self.keeper.require(board_id)
-        board_url = board_url or board_path(board_id)
-        target = Target(target_id=board_id)
+        target = self._target(kind, target_id)
+        board_url = board_url or (board_path(target_id) if kind == "board" else season_path(target_id))
         webhook = next((w for w in self.store.webhooks(target.key) if w.webhook_id == webhook_id), None)
         if webhook is None:
-            raise WebhookNotFound(f"{board_id!r} has no webhook {webhook_id!r}")
+            raise WebhookNotFound(f"{target_id!r} has no webhook {webhook_id!r}")
         now = self.keeper.clock()
-        test = Announcement(event_id=f"{board_id}#test#{now.isoformat()}", kind="board-close",
-                            target=target, board_id=board_id, board_title=stored.board.title,
-                            url=board_url, at=now, podium=podium(self.store, board_id), test=True)
+        test = Announcement(event_id=f"{target.key}#test#{now.isoformat()}", kind="board-close",
+                            target=target, board_id=target_id, board_title=self._title(target),
+                            url=board_url, at=now, test=True,
+                            podium=podium(self.store, target_id) if kind == "board" else [])
         notifier = Notifier(self.store, self.keeper.clock, lambda _: board_url, self.post)
         return notifier.test(webhook, test.model_copy(update={"text": words(test)}))
 
-    def _board(self, board_id: str) -> Target:
-        self.keeper.require(board_id)
-        return Target(kind="board", target_id=board_id)
+    def _target(self, kind: TargetKind, target_id: str) -> Target:
+        if kind == "board":
+            self.keeper.require(target_id)
+        elif self.store.get_season(target_id) is None:
+            raise SeasonNotFound(f"no season {target_id!r}")
+        return Target(kind=kind, target_id=target_id)
+
+    def _title(self, target: Target) -> str:
+        if target.kind == "board":
+            return self.keeper.require(target.target_id).board.title
+        season = self.store.get_season(target.target_id)
+        return season.title if season is not None else target.target_id

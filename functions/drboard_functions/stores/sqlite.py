@@ -65,6 +65,7 @@ from .base import (
     read_page_token,
     stored_record,
 )
+from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
@@ -175,7 +176,7 @@ EXPORT_PAGE_ROWS = 500
 BUSY_RETRY_AFTER_S = 1
 
 
-class SqliteStore:
+class SqliteStore(SqliteSeasons):
     """One SQLite connection per thread that uses the store (WAL: readers run alongside the one
     writer; writers take turns through BEGIN IMMEDIATE). ``:memory:`` is one database per
     connection, so that board keeps a single connection for every thread."""
@@ -191,7 +192,7 @@ class SqliteStore:
         self._enable_wal()
         with self._write():
             counted = self._has_table("rank_counts")
-            for statement in filter(str.strip, SCHEMA.split(";")):
+            for statement in filter(str.strip, (SCHEMA + SEASON_SCHEMA).split(";")):
                 self._db.execute(statement)
             if not counted:  # a board file from before the rank counts
                 self._count_every_board()
@@ -273,6 +274,10 @@ class SqliteStore:
             f"SELECT {BOARD_COLUMNS} FROM boards WHERE board_id = ?", (board_id,)
         ).fetchone()
         return _board(row) if row else None
+
+    def board_version(self, board_id: str) -> int | None:
+        row = self._db.execute("SELECT version FROM boards WHERE board_id = ?", (board_id,)).fetchone()
+        return int(row[0]) if row else None
 
     def create_board(self, board: Board) -> StoredBoard:
         with self._write() as db:

@@ -1,9 +1,9 @@
 """The cloud board: one DynamoDB table (its one definition is ``BoardTable`` in template.yaml).
 
 How each thing is kept as an item is in ``codecs.py``; a push's transaction in
-``transaction.py``; the rank counters in ``ranks.py``. Aliases are claimed in one transaction
-that writes the alias's item and its sign-in's on condition that neither exists. Only this
-package talks to DynamoDB.
+``transaction.py``; the rank counters in ``ranks.py``; seasons in ``seasons.py``. Aliases are
+claimed in one transaction that writes the alias's item and its sign-in's on condition that
+neither exists. Only this package talks to DynamoDB.
 """
 
 from __future__ import annotations
@@ -100,6 +100,7 @@ from .codecs import (
 )
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
+from .seasons import DynamoDbSeasons
 from .transaction import PushTransaction, bans_condition
 
 if TYPE_CHECKING:
@@ -119,7 +120,7 @@ NOTICE_TTL = timedelta(days=30)
 
 
 @translating("the board's table")
-class DynamoDbStore:
+class DynamoDbStore(DynamoDbSeasons):
     """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
     same board, raise StoreBusy; a timeout or a lost connection StoreUnavailable (nothing
     written either way)."""
@@ -134,6 +135,16 @@ class DynamoDbStore:
     def get_board(self, board_id: str) -> StoredBoard | None:
         item = self.get_item(board_id, BOARD_SK)
         return stored_board(item) if item else None
+
+    def board_version(self, board_id: str) -> int | None:
+        # A consistent read of two small attributes (one read unit: the board item is under
+        # 4 KB): a copy kept for the version it reads is never older than the last write.
+        item = self.client.get_item(TableName=self.table, ConsistentRead=True,
+                                    Key=key(board_id, BOARD_SK),
+                                    ProjectionExpression="sk, board_version").get("Item")
+        if not item:
+            return None
+        return int(item.get("board_version", {"N": "0"})["N"])
 
     def create_board(self, board: Board) -> StoredBoard:
         try:
