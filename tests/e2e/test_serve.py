@@ -183,6 +183,23 @@ def _export(board: HttpBoard, board_id: str) -> tuple[list[ExportLine], int]:
             return lines, pages
 
 
+def test_an_export_and_an_import_go_over_http_line_for_line(served_board: Served,
+                                                            tmp_path: Path) -> None:
+    served_board.drboard("push", *EXAMPLES[:3])
+    exported = served_board.drboard("export", "reInvent2019_track").stdout.splitlines()
+    paged, _ = _export(HttpBoard(served_board.url), "reInvent2019_track")
+    assert exported[1:] == [line.model_dump_json() for line in paged[1:]]
+    assert [json.loads(line)["kind"] for line in exported] == ["board"] + ["entry"] * 3 + [
+        "submission"] * 3
+    copy = tmp_path / "copy.jsonl"
+    copy.write_text("\n".join(exported) + "\n")
+    served_board.drboard("import", str(copy), "--board", "smile-copy")
+    pull = ("pull", "--board", "{}", "--format", "json")
+    entries = [json.loads(served_board.drboard(*(a.format(board) for a in pull)).stdout)["entries"]
+               for board in ("smile-copy", "reInvent2019_track")]
+    assert [e["racer"] for e in entries[0]] == [e["racer"] for e in entries[1]]
+
+
 def test_an_organiser_runs_a_cup_over_http(served_board: Served) -> None:
     board = HttpBoard(served_board.url)  # signs organiser calls with the (dummy) AWS credentials
     cup = board.create_board(BoardSpec(board_id="winter-cup", title="Winter Cup",
