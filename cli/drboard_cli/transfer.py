@@ -1,15 +1,18 @@
 """Export a board as JSON lines, and import such a file into any board, idempotently.
 
 An export is one JSON object per line: the board (its id, track, rules, window and limits), then
-its entries in rank order, then every submission with its full record. It is written page by page
-as the board answers, never held whole.
+its entries in rank order, then every submission with its full record. It is written as the
+board gives it (straight from the store on the embedded board, a page at a time over HTTP), never
+held whole.
 
 An import first reads the whole file and checks every line; one bad line names the file, the line
 and the field, and nothing is imported. Then it creates the board (unless a board with that id
 exists: its own settings stay) and replays every submission with its first submission time. The
 target recomputes the entries from the submissions under its own rules: the export's entry lines
 are informative. A submission already on the board is a duplicate and changes nothing, so
-importing the same file twice is harmless.
+importing the same file twice is harmless. Into the embedded board, the check also prepares every
+submission and the board writes them in bulk (``load_export``); a board over HTTP takes them one
+request each (``check_export`` then ``import_export``).
 """
 
 from __future__ import annotations
