@@ -182,3 +182,19 @@ def test_an_import_in_bulk_checks_each_submission_before_writing_anything(tmp_pa
         with pytest.raises(SubmissionTooLarge):
             bulk.prepare(item(huge, 1))
         assert service.boards() == []
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "dynamodb"])
+def test_records_of_many_runs_are_imported_with_every_claim(tmp_path: Path, kind: str) -> None:
+    """A store writes a batch in parts as it must (DynamoDB: 100 items to a transaction): many
+    racers of many runs each still get every fingerprint claimed."""
+    records = [make_record(f"Racer {n:02d}", runs=[[(9000 + 37 * n + 3 * k + lap, 100) for lap in (0, 1, 2)]
+                                                    for k in range(10)]) for n in range(13)]
+    for store in new_store(kind, tmp_path / "board.db"):
+        service = LeaderboardService(store, clock=Clock())
+        assert loaded(service, [item(r, n) for n, r in enumerate(records)], batch=100) == (
+            ImportTally(13, 0))
+        prints = [p.fingerprint for r in records for p in run_prints(r)]
+        held, _ = store.holders(FINALS, prints, [])
+        assert len(prints) == 130 and len(held) == 130
+        assert store.get_board(FINALS).participants == 13  # type: ignore[union-attr]

@@ -3,8 +3,8 @@
 What needs no condition goes in BatchWriteItem calls (25 items each, half the write units of a
 transaction): every record first (``D#``: a committed submission always has its record), then,
 once the submissions are committed, the audit events and the near-copy index. What must stay
-consistent goes in one TransactWriteItems per part of ``PART_ROWS`` submissions (a transaction
-holds 100 items): the submissions (each on condition that it is not on the board yet), each
+consistent goes in one TransactWriteItems per part of up to ``PART_ROWS`` submissions (a
+transaction holds 100 items): the submissions (each on condition that it is not on the board yet), each
 racer's entry when it is their best (on condition that the entry read is still there) with the
 rank counters moved to match, the racers' tallies, the board's participants and version (on
 condition that its rank counters are still those read), and the part's claims of fingerprints
@@ -40,7 +40,7 @@ from .codecs import (
     tally_sk,
     text,
 )
-from .ranks import LAZY_BUILD_MAX_RACERS, RankState
+from .ranks import LAZY_BUILD_MAX_RACERS, TRANSACT_ITEMS, RankState
 from .retries import MAX_ATTEMPTS, backoff
 from .transaction import BATCH_WRITE_ITEMS, Slots
 
@@ -51,6 +51,9 @@ if TYPE_CHECKING:
 #: Submissions one transaction commits: with their entries, tallies, claims and the counters
 #: they move, they stay within a transaction's 100 items.
 PART_ROWS = 12
+#: A row's items in its part's transaction at most, its claims left out: its submission, its
+#: racer's entry and tally, and three counters.
+ROW_ITEMS = 6
 
 
 class BulkWrite:
@@ -74,12 +77,7 @@ class BulkWrite:
         self._put_all([{"board": text(self.board_id), "sk": text(record_sk(row.submission_id)),
                         "record": {"B": zlib.compress(row.record.encode())}} for row in rows])
         created = improved = 0
-        for start in range(0, len(rows), PART_ROWS):
-            part = rows[start:start + PART_ROWS]
-            racers = {row.racer_key for row in part}
-            claims = [fingerprint_item(self.board_id, f, r)
-                      for f, r in self.batch.fingerprints if r in racers]
-            claims += [skeleton_item(self.board_id, s, r) for s, r in self.batch.skeletons if r in racers]
+        for part, claims in self._parts(rows):
             stored, better = self._commit(part, claims)
             created += stored
             improved += better
@@ -88,6 +86,30 @@ class BulkWrite:
         self._put_all([_near_item(self.board_id, run) for run in self.batch.runs if run.laps_ms])
         self._put_all([audit_item(event) for event in self.batch.audit])
         return ImportWritten(created=created, improved=improved)
+
+    def _parts(self, rows: list[ImportedRow]) -> list[tuple[list[ImportedRow], list[Item]]]:
+        """The rows in parts of at most PART_ROWS, each with the claims of its racers that no
+        earlier part made, and within a transaction's items: per row its submission, entry,
+        tally and up to three counters, its claims, and the board's item."""
+        claims: dict[str, list[Item]] = {}
+        for fingerprint, racer in self.batch.fingerprints:
+            claims.setdefault(racer, []).append(fingerprint_item(self.board_id, fingerprint, racer))
+        for skeleton, racer in self.batch.skeletons:
+            claims.setdefault(racer, []).append(skeleton_item(self.board_id, skeleton, racer))
+        parts: list[tuple[list[ImportedRow], list[Item]]] = []
+        part: list[ImportedRow] = []
+        held: list[Item] = []
+        for row in rows:
+            mine = claims.pop(row.racer_key, [])
+            if part and (len(part) == PART_ROWS
+                         or 1 + ROW_ITEMS * (len(part) + 1) + len(held) + len(mine) > TRANSACT_ITEMS):
+                parts.append((part, held))
+                part, held = [], []
+            part.append(row)
+            held += mine
+        if part:
+            parts.append((part, held))
+        return parts
 
     def _commit(self, part: list[ImportedRow], claims: list[Item]) -> tuple[int, int]:
         """One part in one transaction; how many submissions it stored and entries it changed."""
