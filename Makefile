@@ -13,20 +13,18 @@ RUNTIME_PROVIDED = boto3 boto3-* botocore botocore-* s3transfer s3transfer-* url
 	dateutil python_dateutil-* jmespath jmespath-* six.py six-*
 
 # Never used at run time: Powertools' Swagger UI assets (the functions never call
-# enable_swagger) and wrapt's C source (its compiled extension ships beside it).
+# enable_swagger).
 UNUSED = aws_lambda_powertools/event_handler/openapi/swagger_ui/*.js \
-	aws_lambda_powertools/event_handler/openapi/swagger_ui/*.css wrapt/*.c
+	aws_lambda_powertools/event_handler/openapi/swagger_ui/*.css
 
 # Lambda's file system is read-only: a module shipped without its .pyc is compiled again at every
 # cold start (~300-400 ms for these functions). Compiled here with the runtime's Python, as
 # checked-hash .pyc (valid whatever the files' times after zipping; a changed source is still
-# noticed). Only what the functions import: the rest of Powertools' utilities, the X-Ray SDK's
-# integrations other than botocore's, pydantic.v1, pydantic.experimental and pydantic's mypy
-# plugin stay source-only, which keeps the bundle small.
+# noticed). Only what the functions import: the rest of Powertools' utilities, pydantic.v1,
+# pydantic.experimental and pydantic's mypy plugin stay source-only, which keeps the bundle small.
 # bench/bench_functions.py counts the modules a cold start still compiles (should be none).
 PRECOMPILED = drboard_assembler drboard_functions segno regex disarm jinja2 markupsafe typing_extensions.py annotated_types \
-	typing_inspection pydantic pydantic_core wrapt aws_xray_sdk/*.py aws_xray_sdk/core \
-	aws_xray_sdk/ext/*.py aws_xray_sdk/ext/botocore aws_lambda_powertools/*.py \
+	typing_inspection pydantic pydantic_core aws_lambda_powertools/*.py \
 	aws_lambda_powertools/event_handler aws_lambda_powertools/exceptions \
 	aws_lambda_powertools/logging aws_lambda_powertools/metrics \
 	aws_lambda_powertools/middleware_factory aws_lambda_powertools/shared \

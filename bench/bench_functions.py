@@ -85,7 +85,8 @@ def lambda_environment(function: str, table: str, task_root: Path) -> dict[str, 
     defaults = {name: str(p.get("Default", "")) for name, p in document["Parameters"].items()}
     names = defaults | {"BoardTable": table, "ArchiveBucket": ARCHIVE_BUCKET,
                         "RacerPool": "us-east-1_Bench0000", "CliClient": "benchclient",
-                        "RacerSignInDomain": "drboard-bench", "AWS::Region": "us-east-1"}
+                        "RacerSignInDomain": "drboard-bench", "BoardApi": "bench00api",
+                        "AWS::Region": "us-east-1", "AWS::URLSuffix": "amazonaws.com"}
 
     def value(raw: Any) -> str:
         if isinstance(raw, dict) and set(raw) == {"Ref"}:

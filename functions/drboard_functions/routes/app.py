@@ -39,7 +39,6 @@ from aws_lambda_powertools.event_handler.openapi.exceptions import (
 )
 from drboard_assembler.errors import field_path
 
-from .. import web
 from ..errors import (
     AliasTaken,
     Banned,
@@ -184,6 +183,8 @@ def _answer(app: APIGatewayHttpResolver, error: DomainError) -> Response[Any]:
     status = status_of(error)
     headers = error_headers(error)
     if _is_page_request(app):
+        from .. import web  # the pages' module: only the pull function has pages
+
         return page_answer(web.error_page(status.value, status.phrase, error.message), status, headers)
     return Response(status_code=status, content_type=content_types.APPLICATION_JSON,
                     body=error_body(error).model_dump(mode="json"), headers=headers)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
+from . import admin_router, pull_router, push_router
 from .app import build_app
-from .params import admin_router, pull_router, push_router
 
 _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
 #: Every route's answer when the board's storage is busy or unreachable (nothing was written).

@@ -8,7 +8,6 @@ serving laptop must still tell racers the address their laptops reach)."""
 from __future__ import annotations
 
 from http import HTTPStatus
-from typing import Any
 
 from aws_lambda_powertools.event_handler import Request, Response
 
@@ -28,6 +27,7 @@ from .params import (
     Screen,
     Service,
     Top,
+    origin,
     pull_router,
     segment,
 )
@@ -82,15 +82,7 @@ def _invite(request: Request) -> web.Invite:
         invite = given()
         if isinstance(invite, web.Invite):
             return invite
-    return web.Invite(endpoint=_origin(request.resolved_event))
-
-
-def _origin(event: Any) -> str:
-    headers = event.headers or {}
-    context = event.raw_event.get("requestContext") or {}
-    host = headers.get("host") or context.get("domainName") or "localhost"
-    scheme = headers.get("x-forwarded-proto", "http").split(",")[0].strip()
-    return f"{scheme}://{host}"
+    return web.Invite(endpoint=origin(request.resolved_event))
 
 
 @pull_router.get(

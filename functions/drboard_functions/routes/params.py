@@ -117,6 +117,15 @@ def segment(value: str) -> str:
     return unquote(value)
 
 
+def origin(event: Any) -> str:
+    """The scheme and host the client used to reach the board (https behind API Gateway)."""
+    headers = event.headers or {}
+    context = event.raw_event.get("requestContext") or {}
+    host = headers.get("host") or context.get("domainName") or "localhost"
+    scheme = headers.get("x-forwarded-proto", "http").split(",")[0].strip()
+    return f"{scheme}://{host}"
+
+
 # ---- request bodies: what each route takes, and its bound --------------------------------------
 
 

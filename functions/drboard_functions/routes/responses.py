@@ -4,10 +4,7 @@ answers, and the ETag of a board's page."""
 from __future__ import annotations
 
 import hashlib
-from functools import cache
 from http import HTTPStatus
-from importlib.metadata import PackageNotFoundError
-from importlib.metadata import version as distribution_version
 from typing import Any
 
 from aws_lambda_powertools.event_handler import Response, content_types
@@ -24,12 +21,11 @@ PAGE_HEADERS = {
 }
 
 
-@cache  # reading the package's metadata costs a third of a pull: once per process is enough
 def api_version() -> str:
-    try:
-        return distribution_version("drboard")
-    except PackageNotFoundError:  # pragma: no cover - a Lambda bundle without dist metadata
-        return assembler_version
+    """The distribution's version, as its packages write it out (tests/unit/test_openapi.py holds
+    it equal to the installed distribution's): a Lambda bundle has no metadata to read, and
+    looking for it costs a cold start more than the rest of building the resolver."""
+    return assembler_version
 
 
 # ---- response and error models --------------------------------------------------------------

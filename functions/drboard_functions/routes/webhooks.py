@@ -12,10 +12,8 @@ from aws_lambda_powertools.event_handler.openapi.params import Body, Path
 
 from ..errors import InvalidQuery
 from ..models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
-from ..web import board_path
 from .organisers import _ADMIN, _NO_BOARD, _admin_responses
-from .pages import _origin
-from .params import BoardId, Organiser, RequestBody, Service, admin_router, segment, takes
+from .params import BoardId, Organiser, RequestBody, Service, admin_router, origin, segment, takes
 from .responses import json_answer, json_response
 
 WEBHOOK_BODY = RequestBody("webhook", 4096, InvalidQuery)
@@ -80,6 +78,8 @@ def remove_webhook(board: BoardId, webhook: WebhookId, service: Service,
 )
 def test_webhook(board: BoardId, webhook: WebhookId, service: Service, organiser: Organiser,
                  request: Request) -> Delivery:
+    from ..web import board_path  # the pages' module, which the admin function never loads else
+
     board_id = segment(board)
-    url = _origin(request.resolved_event) + board_path(board_id)
+    url = origin(request.resolved_event) + board_path(board_id)
     return service.test_webhook(board_id, segment(webhook), url)
