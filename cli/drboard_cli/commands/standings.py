@@ -1,4 +1,6 @@
-"""The commands that read a board: pull, boards, compare, insights, history, show and status."""
+"""The commands that read a board: pull, boards, compare, insights, history, show and status.
+
+They only read and print: each ends the process as soon as its output is out (:func:`finish`)."""
 
 from __future__ import annotations
 
@@ -7,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ..main import Context, edge, out, pass_context
+from ..main import Context, edge, finish, out, pass_context
 
 if TYPE_CHECKING:
     from ..target import BoardClient
@@ -54,6 +56,7 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
     with edge():
         page = _collect(ctx.board, _board_id(track, board), top)
         _emit(page, fmt, output)
+    finish()
 
 
 def _collect(client: BoardClient, board_id: str, top: int) -> Any:
@@ -108,6 +111,7 @@ def boards(ctx: Context, wanted: str | None, fmt: str) -> None:
             out().print(f"No {wanted.lower()} boards.")
         else:
             out().print("No boards yet: push a run with `drboard push PATH`.")
+    finish()
 
 
 @click.command()
@@ -133,6 +137,7 @@ def compare(ctx: Context, racers: tuple[str, ...], track: str | None, board: str
             click.echo(render.json_text(comparison.model_dump_json(indent=2)))
         else:
             out().print(render.comparison_table(comparison))
+    finish()
 
 
 @click.command()
@@ -156,6 +161,7 @@ def insights(ctx: Context, track: str | None, board: str | None, top: int, fmt: 
             click.echo(render.json_text(found.model_dump_json(indent=2)))
         else:
             out().print(render.insights_table(found))
+    finish()
 
 
 def racer_options(command: Any) -> Any:
@@ -201,6 +207,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
             out().print(render.history_table(name, items, out().width))
         else:
             out().print(f"No submissions by {name} yet.", markup=False)
+    finish()
 
 
 @click.command()
@@ -219,6 +226,7 @@ def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: st
             click.echo(render.json_text(view.model_dump_json(indent=2)))
         else:
             out().print(render.racer_panel(view))
+    finish()
 
 
 @click.command()
@@ -241,3 +249,4 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
             click.echo(render.json_text(summary.model_dump_json(indent=2)))
         else:
             out().print(render.status_table(summary, out().width))
+    finish()

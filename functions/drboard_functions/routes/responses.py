@@ -34,7 +34,7 @@ def api_version() -> str:
 class FieldProblem(BaseModel):
     """One problem with one field: ``loc`` is a path such as ``evaluations[0].laps[2].time_ms``."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
     loc: str
     msg: str
@@ -44,7 +44,7 @@ class FieldProblem(BaseModel):
 class ErrorBody(BaseModel):
     """Every error answer: the domain error's name, a message for people, and field detail."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
     error: str
     message: str

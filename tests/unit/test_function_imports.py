@@ -1,0 +1,105 @@
+"""Each Lambda function imports only what its routes use, so its cold start pays for nothing else.
+
+bench/bench_functions.py measures the cold starts; these tests check what a fresh process of each
+handler has imported: after the import, and for the pull function after its first request too.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from drboard_assembler.record import Record
+from drboard_functions.services import sqlite_service
+
+EVENTS = Path(__file__).parents[2] / "events"
+
+#: What no function imports: the X-Ray SDK (traces are Lambda's own).
+NOWHERE = ("aws_xray_sdk",)
+#: Besides NOWHERE, what each handler's import must leave alone.
+NOT_IMPORTED = {
+    "pull": ("drboard_functions.routes.submissions", "drboard_functions.routes.organisers",
+             "drboard_functions.routes.webhooks", "drboard_functions.service.pushing",
+             "drboard_functions.service.transfer", "drboard_functions.service.managing",
+             "drboard_functions.service.moderating", "drboard_functions.service.aliases",
+             "drboard_functions.service.webhooks", "drboard_functions.models.transfer",
+             "drboard_functions.models.requests", "drboard_functions.models.notices",
+             "drboard_functions.notify", "drboard_functions.charts", "regex", "disarm", "jinja2"),
+    "push": ("drboard_functions.routes.boards", "drboard_functions.routes.pages",
+             "drboard_functions.routes.results", "drboard_functions.routes.organisers",
+             "drboard_functions.routes.webhooks", "drboard_functions.web",
+             "drboard_functions.service.transfer", "drboard_functions.service.managing",
+             "drboard_functions.service.moderating", "drboard_functions.service.webhooks",
+             "drboard_functions.models.transfer",
+             "drboard_functions.notify", "jinja2"),
+    "admin": ("drboard_functions.routes.boards", "drboard_functions.routes.pages",
+              "drboard_functions.routes.results", "drboard_functions.routes.submissions",
+              "drboard_functions.web", "jinja2"),
+}
+
+LAMBDA_ENVIRONMENT = {"POWERTOOLS_SERVICE_NAME": "drboard", "POWERTOOLS_METRICS_NAMESPACE": "drboard",
+                      "AWS_LAMBDA_FUNCTION_NAME": "drboard-test", "TABLE_NAME": "unused"}
+
+#: Run in a fresh process: import the handler, answer one event on an SQLite board (the wiring
+#: swapped as in test_handlers), and tell the modules loaded and whether the Record's schema was built.
+PROBE = """
+import json, sys
+from pathlib import Path
+kind, db, event = sys.argv[1], sys.argv[2], sys.argv[3]
+handler = __import__("drboard_functions.handlers." + kind, fromlist=["lambda_handler"])
+imported = sorted(sys.modules)
+answered = None
+if event:
+    from drboard_functions.handlers import wiring
+    from drboard_functions.services import sqlite_service
+    wiring.service_from_environment = lambda: sqlite_service(Path(db))
+    class Context:
+        function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
+        invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
+        aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
+    answered = handler.lambda_handler(json.loads(Path(event).read_text()), Context())["statusCode"]
+from drboard_assembler.record import Record
+print(json.dumps({"imported": imported, "answered": answered, "loaded": sorted(sys.modules),
+                  "record_schema_built": Record.__pydantic_complete__}))
+"""
+
+
+def probe(kind: str, db: Path | None = None, event: str = "") -> dict[str, object]:
+    arguments = [kind, str(db or ""), str(EVENTS / event) if event else ""]
+    done = subprocess.run([sys.executable, "-c", PROBE, *arguments], capture_output=True, text=True,
+                          check=False, env={**os.environ, **LAMBDA_ENVIRONMENT})
+    assert done.returncode == 0, done.stderr
+    found: dict[str, object] = json.loads(done.stdout.splitlines()[-1])
+    return found
+
+
+def among(modules: object, prefixes: tuple[str, ...]) -> list[str]:
+    assert isinstance(modules, list)
+    return [m for m in modules if m.startswith(prefixes)]
+
+
+@pytest.mark.parametrize("kind", sorted(NOT_IMPORTED))
+def test_a_handler_imports_only_its_own_routes_and_rooms(kind: str) -> None:
+    found = probe(kind)
+    assert among(found["imported"], NOT_IMPORTED[kind] + NOWHERE) == []
+
+
+@pytest.fixture
+def board_with_a_push(tmp_path: Path) -> Path:
+    db = tmp_path / "board.db"
+    record = Record.model_validate_json(json.loads((EVENTS / "push.json").read_text())["body"])
+    sqlite_service(db).push(record)
+    return db
+
+
+def test_the_pull_function_answers_the_standings_without_the_record_schema(board_with_a_push: Path) -> None:
+    """The standings hold entries, not records: the pull's first request builds no Record schema
+    and loads no push, organiser or webhook code."""
+    found = probe("pull", board_with_a_push, "pull_board.json")
+    assert found["answered"] == 200
+    assert among(found["loaded"], NOT_IMPORTED["pull"] + NOWHERE) == []
+    assert found["record_schema_built"] is False
