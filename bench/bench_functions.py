@@ -271,11 +271,23 @@ print(json.dumps({"first_ms": (answered - start) * 1000, "items": len(page["Item
 """
 
 
-def floor(sandbox: Sandbox, table: str) -> float:
-    """The floor's time, on the board the pull function reads (which the push made)."""
+#: The floor with the libraries every function is built on imported first (Powertools' resolver,
+#: logger and metrics, and pydantic), run in the pull function's folder: what a function pays
+#: before any code of drboard's own. Shown beside the floor, without a target.
+STACK_CODE = FLOOR_CODE.replace("import boto3\n", """import pydantic
+from aws_lambda_powertools import Logger, Metrics
+from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
+Logger(); Metrics(); APIGatewayHttpResolver(enable_validation=True)
+import boto3
+""")
+
+
+def floor(sandbox: Sandbox, table: str, code: str = FLOOR_CODE) -> float:
+    """The floor's time, on the board the pull function reads (which the push made); with
+    STACK_CODE, the floor with the functions' libraries."""
     event = json.loads((ROOT / "events" / FIRST_REQUEST["pull"][0]).read_text())
     board, limit = event["pathParameters"]["board"], event["queryStringParameters"]["limit"]
-    done = sandbox.run("pull", table, "-c", FLOOR_CODE, table, board, limit, bare=True)
+    done = sandbox.run("pull", table, "-c", code, table, board, limit, bare=code == FLOOR_CODE)
     result = json.loads(done.stdout.splitlines()[-1])
     if result["items"] != 2:
         sys.exit(f"bench_functions: the floor's Query read {result['items']} items, not the board's "
@@ -311,17 +323,17 @@ class StubS3(BaseHTTPRequestHandler):
 Samples = dict[str, dict[str, list[Any]]]
 
 
-def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> tuple[Samples, list[float]]:
+def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> tuple[Samples, dict[str, list[float]]]:
     """``runs`` cold starts of each function, and of the floor, alternated so that all see the
     same load: each round makes a new table, and each function answers its first request on it
-    in turn (see FIRST_REQUEST; a function without one is only imported), then the floor makes
-    its Query."""
+    in turn (see FIRST_REQUEST; a function without one is only imported), then the floor and the
+    floor with the functions' libraries make their Query."""
     s3 = ThreadingHTTPServer(("127.0.0.1", 0), StubS3)
     threading.Thread(target=s3.serve_forever, daemon=True).start()
     sandbox.endpoints = {"AWS_ENDPOINT_URL_DYNAMODB": server.endpoint,
                          "AWS_ENDPOINT_URL_S3": f"http://127.0.0.1:{s3.server_address[1]}"}
     client = server.client()
-    floors: list[float] = []
+    floors: dict[str, list[float]] = {"floor": [], "stack": []}
     order = sorted(HANDLERS.values(), key=lambda k: list(FIRST_REQUEST).index(k) if k in FIRST_REQUEST
                    else len(FIRST_REQUEST))
     samples: Samples = {
@@ -338,9 +350,10 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> tuple[Sam
                         samples[kind]["import"].append(result["import_ms"])
                         samples[kind]["first"].append(result["first_ms"])
                         samples[kind]["compiled"].append(result["compiled"])
-            floor_ms = floor(sandbox, table)
+            floor_ms, stack_ms = floor(sandbox, table), floor(sandbox, table, STACK_CODE)
             if round_:
-                floors.append(floor_ms)
+                floors["floor"].append(floor_ms)
+                floors["stack"].append(stack_ms)
             client.delete_table(TableName=table)
     finally:
         s3.shutdown()
@@ -440,10 +453,14 @@ def main(argv: list[str] | None = None) -> int:
 
     where = (f"{runs} fresh processes of Python {runtime_version()} in the function as built for "
              f"{host_platform()}, Lambda's environment")
-    floor_p50, floor_p95 = p50_p95(floors)
+    floor_p50, floor_p95 = p50_p95(floors["floor"])
     report.add("floor: import boto3 + a client + one Query p50", floor_p50, "ms",
                note=f"p95 {floor_p95:.0f} ms; {where} but with none of the function's code, the "
                     "pull's Query of the board the push made, on DynamoDB Local")
+    stack_p50, _ = p50_p95(floors["stack"])
+    report.add("floor with Powertools (resolver, logger, metrics) and pydantic imported / floor",
+               stack_p50 / floor_p50, "x", note=f"no target: {stack_p50:.0f} ms p50, what any function "
+                                               "built on these libraries pays before drboard's own code")
     for kind, samples in cold.items():
         p50, _ = p50_p95(samples["importtime"])
         report.add(f"cold import of the {kind} handler module p50", p50, "ms",
