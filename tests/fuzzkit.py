@@ -1,17 +1,23 @@
 """Seeded mutations of the example runs, for fuzzing the assembler.
 
-``mutate(seed, into)`` copies one example run into ``into`` and breaks it in one to three ways
-drawn from the seed: flipped, cut or inserted bytes; a JSON or YAML value swapped for a hostile
-one (NaN, huge or negative numbers, 5,000-digit integers, deep nesting, YAML aliases and tags);
-special files (FIFOs, symbolic-link loops, links out of the folder); a file removed, emptied,
-duplicated or grown past its bound; a job log added, its lines cut or garbled; or the run
-packed as a ``.tar.gz`` that is then damaged.
+``mutate(seed, into)`` writes one run into ``into`` (an example run, or a producer's download
+built by tests/downloadkit.py: console with logs, DeepRacer-for-Cloud, DeepRacer on AWS, three
+models in a folder) and breaks it in one to three ways drawn from the seed: flipped, cut or
+inserted bytes; a JSON or YAML value swapped for a hostile one (NaN, huge or negative numbers,
+5,000-digit integers, deep nesting, YAML aliases and tags); special files (FIFOs, symbolic-link
+loops, links out of the folder); a file removed, emptied, duplicated, renamed (to a name that is
+not UTF-8, holds control characters, is 255 bytes long, or loses or changes its extension),
+re-encoded (UTF-16, Latin-1, a byte-order mark, CRLF) or grown past its bound; training metrics
+with timestamps spread over a billion seconds, nonsense end times, huge episode numbers or
+thousands of entries; a job log added, its lines cut or garbled; or the run packed as a
+``.tar.gz`` that is then damaged.
 The same seed always gives the same case. Used by tests/unit/test_fuzz_assembler.py (a small
 budget) and bench/fuzz_assembler.py (thousands of cases, with time and memory bounds).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import random
@@ -21,7 +27,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from tests import logkit
+from tests import downloadkit, logkit
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -52,14 +58,29 @@ def example_runs() -> list[Path]:
     return sorted(p for p in EXAMPLES.iterdir() if p.is_dir())
 
 
+#: The producers' downloads the fuzzer also starts from, by the folder name each is written to.
+DOWNLOADS: dict[str, Callable[[Path], Path]] = {
+    "pitstop-console-with-logs": downloadkit.console_download,
+    "fastcar-drfc": lambda folder: downloadkit.drfc_folder(folder, 38043),
+    "droa-evaluation": downloadkit.droa_evaluation_download,
+    "droa-solution": lambda folder: downloadkit.droa_solution_download(
+        folder, downloadkit.kit.hyperparameters()),
+    "three-models": downloadkit.three_models,
+}
+
+
 def mutate(seed: int, into: Path) -> Path:
     """Write case ``seed`` under ``into`` and return the path to assemble."""
     rng = random.Random(seed)
-    source = rng.choice(example_runs())
-    run = into / source.name
-    shutil.copytree(source, run)
+    source = rng.choice([*example_runs(), *DOWNLOADS])
+    if isinstance(source, Path):
+        run = into / source.name
+        shutil.copytree(source, run)
+    else:
+        run = DOWNLOADS[source](into / source)
     for _ in range(rng.choice((1, 1, 2, 3))):
-        rng.choice(FOLDER_MUTATIONS)(rng, run)
+        with contextlib.suppress(OSError):  # a name grown past the file system's bound
+            rng.choice(FOLDER_MUTATIONS)(rng, run)
     if rng.random() < 0.2:
         return _archive(rng, run, into)
     return run
@@ -69,8 +90,13 @@ def _files(run: Path) -> list[Path]:
     return sorted(p for p in run.rglob("*") if p.is_file() and not p.is_symlink())
 
 
+#: A file grown past this (a sparse file past every bound) is not edited again: it stays as big.
+EDITED_BYTES = 16 * 1024 * 1024
+
+
 def _pick(rng: random.Random, run: Path, suffixes: tuple[str, ...] = ()) -> Path | None:
-    files = [p for p in _files(run) if not suffixes or p.suffix in suffixes]
+    files = [p for p in _files(run) if (not suffixes or p.suffix in suffixes)
+             and p.stat().st_size <= EDITED_BYTES]
     return rng.choice(files) if files else None
 
 
@@ -161,7 +187,8 @@ def edit_yaml_value(rng: random.Random, run: Path) -> None:
     index = rng.randrange(len(lines))
     key = lines[index].split(":", 1)[0]
     value = rng.choice(['""', "-1", "1e999", "null", "[]", '"\u202eabc"', "9" * 30,
-                        '"reInvent2019_track_oa"', '"OBJECT_AVOIDANCE"', '"HEAD_TO_BOT"', "~"])
+                        '"reInvent2019_track_oa"', '"OBJECT_AVOIDANCE"', '"HEAD_TO_BOT"', "~",
+                        '"' + "x" * 80 + '"', '"5.0e3"', "nan", '"caf\xe9"'])
     lines[index] = f"{key}: {value}"
     path.write_text("\n".join(lines) + "\n")
 
@@ -236,10 +263,77 @@ def add_log(rng: random.Random, run: Path) -> None:
                  "\n".join(lines) + "\n")
 
 
+def rename_file(rng: random.Random, run: Path) -> None:
+    """A file renamed as racers and their tools do, and as no tool should."""
+    if (path := _pick(rng, run)) is None:
+        return
+    stem = path.stem
+    name = rng.choice([
+        os.fsencode(stem) + b"-\xff\xfe" + os.fsencode(path.suffix),  # not UTF-8
+        os.fsencode(stem) + b"-caf\xe9" + os.fsencode(path.suffix),  # Latin-1
+        os.fsencode(f"{stem}\n\t\x1b[31m{path.suffix}"),  # control characters
+        os.fsencode(("x" * 250 + path.suffix)[-255:]),  # as long as a name can be
+        os.fsencode(f"{stem}.txt"), os.fsencode(stem), os.fsencode(path.name.upper()),
+        os.fsencode(f"{stem} (1){path.suffix}"), os.fsencode(f"renamed{path.suffix}"),
+    ])
+    with contextlib.suppress(OSError):
+        path.rename(Path(os.fsdecode(os.path.join(os.fsencode(path.parent), name))))
+
+
+def reencode_file(rng: random.Random, run: Path) -> None:
+    """A text file saved again in another encoding, or with a byte-order mark or CRLF."""
+    if (path := _pick(rng, run, (".json", ".yaml", ".log", ".txt"))) is None:
+        return
+    text = path.read_bytes().decode("utf-8", "replace")
+    encoding = rng.choice(["utf-16", "utf-8-sig", "latin-1", "crlf", "cp1252"])
+    if encoding == "crlf":
+        path.write_bytes(text.replace("\n", "\r\n").encode())
+    elif encoding in ("latin-1", "cp1252"):
+        path.write_bytes((text + "  # café ñ").encode(encoding, "replace"))
+    else:
+        path.write_bytes(text.encode(encoding))
+
+
+def training_metrics(rng: random.Random, run: Path) -> None:
+    """Training metrics whose figures no training has: timestamps spread over 10^9 s, an end
+    time of 10^10, episode numbers past any count, copies, thousands of entries."""
+    files = [p for p in _files(run) if p.suffix == ".json" and "raining" in str(p.relative_to(run))
+             and p.stat().st_size <= EDITED_BYTES]
+    if not files:
+        return
+    path = rng.choice(files)
+    try:
+        data = json.loads(path.read_bytes())
+        entries = data["metrics"]
+        assert isinstance(entries, list) and entries and all(isinstance(e, dict) for e in entries)
+    except (ValueError, KeyError, TypeError, AssertionError):
+        return
+    kind = rng.choice(["spread", "end", "episode", "copy", "many", "phase", "reward"])
+    last = entries[-1]
+    if kind == "spread":
+        elapsed = last.get("elapsed_time_in_milliseconds", 0)
+        last["start_time"], last["metric_time"] = 1e12, 1e12 + (elapsed if isinstance(elapsed, int) else 0)
+    elif kind == "end":
+        rng.choice(entries)["metric_time"] = rng.choice([1e10, 1e14, -1, 0])
+    elif kind == "episode":
+        rng.choice(entries)["episode"] = rng.choice([10**6 + 1, 10**8, 10**8 + 1, -5])
+    elif kind == "copy":
+        shutil.copy(path, path.with_name(f"copy-{path.name}"))
+        return
+    elif kind == "many":
+        data["metrics"] = entries * (rng.randint(2000, 20000) // len(entries) + 1)
+    elif kind == "phase":
+        for entry in entries:
+            entry["phase"] = rng.choice(["evaluation", "TRAINING", "", "x" * 40])
+    else:
+        rng.choice(entries)["reward_score"] = rng.choice([1e9, -1e9, 1e10])
+    path.write_text(json.dumps(data))
+
+
 FOLDER_MUTATIONS: list[Callable[[random.Random, Path], None]] = [
     flip_bytes, cut_bytes, insert_bytes, swap_json_value, swap_json_value, big_json_number,
     swap_yaml, edit_yaml_value, special_file, remove_or_empty, duplicate_file, oversize_file,
-    add_log, add_log,
+    add_log, add_log, rename_file, rename_file, reencode_file, training_metrics, training_metrics,
 ]
 
 

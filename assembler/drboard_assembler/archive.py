@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 import lzma
 import shutil
 import tarfile
@@ -30,14 +31,32 @@ def unpack(archive: Path, into: Path) -> Path:
         with tarfile.open(archive, "r:*") as tar:
             for member in _checked_members(tar, name):
                 _write(tar, member, into)
+            _check_the_rest(tar, name)
     except tarfile.TarError as error:
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise AssemblyError(name, "", f"not a readable tar archive ({reason})") from None
-    except (zlib.error, lzma.LZMAError, EOFError) as error:
+    except (zlib.error, lzma.LZMAError, EOFError, gzip.BadGzipFile) as error:
         raise AssemblyError(name, "", f"not a readable tar archive ({error or 'truncated'})") from None
     except OSError as error:
         raise AssemblyError(name, "", f"cannot be unpacked ({error})") from None
     return _single_top_folder(into)
+
+
+def _check_the_rest(tar: tarfile.TarFile, name: str) -> None:
+    """What follows the last member must be the archive's end: zero blocks, and for a
+    compressed archive a stream that ends as it should (its checksum is read last). A damaged
+    member header ends tarfile's reading quietly, and would otherwise lose the files after it."""
+    left = 64 * 1024 * 1024
+    stream = tar.fileobj
+    assert stream is not None
+    while left > 0:
+        chunk = stream.read(min(left, 1024 * 1024))
+        if not chunk:
+            return
+        if chunk.strip(b"\0"):
+            raise AssemblyError(name, "", "not a readable tar archive (damaged after its last "
+                                "readable member)")
+        left -= len(chunk)
 
 
 def _write(tar: tarfile.TarFile, member: tarfile.TarInfo, into: Path) -> None:

@@ -22,6 +22,14 @@ class Track:
     length_m: float
     width_m: float
     has_direction_variants: bool
+    #: The shortest closed path the car's centre can drive without going off track, derived from
+    #: the simulator's route files by scripts/derive_track_geometry.py; the official length
+    #: (the centre line's) where the catalog holds no route.
+    shortest_lap_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.shortest_lap_m:
+            object.__setattr__(self, "shortest_lap_m", self.length_m)
 
 
 @dataclass(frozen=True)
@@ -142,7 +150,9 @@ class TrackCatalog:
 
 @cache
 def default_catalog() -> TrackCatalog:
-    text = resources.files("drboard_assembler").joinpath("data/tracks.csv").read_text("utf-8")
+    data = resources.files("drboard_assembler").joinpath("data")
+    shortest = {row["world_name"]: float(row["shortest_lap_m"]) for row in
+                csv.DictReader(data.joinpath("track_geometry.csv").read_text("utf-8").splitlines())}
     tracks = [
         Track(
             world_name=row["world_name"],
@@ -150,7 +160,8 @@ def default_catalog() -> TrackCatalog:
             length_m=float(row["length_m"]),
             width_m=float(row["width_m"]),
             has_direction_variants=row["cw_ccw_variants"].strip().lower() == "yes",
+            shortest_lap_m=shortest.get(row["world_name"], 0.0),
         )
-        for row in csv.DictReader(text.splitlines())
+        for row in csv.DictReader(data.joinpath("tracks.csv").read_text("utf-8").splitlines())
     ]
     return TrackCatalog(tracks)

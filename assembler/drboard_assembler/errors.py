@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 class AssemblyError(Exception):
@@ -22,9 +25,20 @@ class AssemblyError(Exception):
 
     def __str__(self) -> str:
         # dict.fromkeys drops the file when it is the given path itself
-        where = ": ".join(dict.fromkeys(part for part in (self.given, self.file, self.field) if part))
+        where = ": ".join(dict.fromkeys(printable(part) for part in (self.given, self.file, self.field)
+                                        if part))
         hint = f" (use {self.flag})" if self.flag else ""
-        return f"{where}: {self.problem}{hint}"
+        return f"{where}: {printable(self.problem)}{hint}"
+
+
+def printable(text: str) -> str:
+    """The text on one line and encodable: bytes of a file name that are not UTF-8 (which Python
+    keeps as lone surrogates) and control characters are shown escaped (``\\xff``, ``\\n``)."""
+    try:
+        text = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate no file name holds (from a JSON "\ud800")
+        text = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return _CONTROL.sub(lambda match: repr(match[0])[1:-1], text)
 
 
 def field_path(loc: Sequence[int | str]) -> str:

@@ -1,15 +1,22 @@
-"""Find the five inputs in a run folder, whatever layout wrote it."""
+"""Step 1, find the files: the inputs of a run folder, whatever layout wrote it.
+
+Files are known by their names first (``model_metadata.json``, ``eval_params_<uuid>.yaml``,
+``metrics/evaluation/*.json``, ``*.log``, ...), then, for a file no name describes, by what it
+holds: racers rename metrics files and save logs as ``*.txt`` or with no extension at all, so the
+head of such a file is read to tell a job log, an evaluation or a training metrics file.
+"""
 
 from __future__ import annotations
 
 import os
 import re
 import stat
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import limits
-from .errors import AssemblyError
+from .errors import AssemblyError, printable
 from .record import SourceLayout
 
 _PARAMS = re.compile(r"^(training_params|evaluation_params|eval_params)([_-][\w.-]+)?\.ya?ml$",
@@ -20,6 +27,14 @@ _EVALUATION = re.compile(
     r"^(EvaluationMetrics.*|EvalMetrics.*|evaluation-.+|.+-(evaluation|submission)-.+"
     r"|evaluation(_metrics)?)\.json$",
     re.IGNORECASE)
+#: Files whose kind no content could change: media, models, code, archives, sim-traces.
+_NEVER_SNIFFED = {".py", ".mp4", ".png", ".jpg", ".jpeg", ".gif", ".pb", ".onnx", ".h5", ".index",
+                  ".meta", ".gz", ".tgz", ".tar", ".zip", ".yaml", ".yml", ".md", ".ckpt", ".npy"}
+_LOG_MARKERS = (b"SIM_TRACE_LOG", b"Action space from file", b"Using the following hyper-parameters",
+                b"WORLD_NAME", b"Training>", b"@message", b"simapp_version", b"sagemaker")
+_METRICS = re.compile(rb'"metrics"\s*:\s*\[\s*\{(?P<entry>[^{}]{0,2000})\}', re.DOTALL)
+_TRAINING_KEYS = (b'"phase"', b'"reward_score"', b'"episode"')
+_EVALUATION_KEYS = (b'"trial"', b'"off_track_count"', b'"crash_count"', b'"elapsed_time_in_milliseconds"')
 
 
 @dataclass
@@ -33,8 +48,9 @@ class RunFiles:
     logs: list[Path] = field(default_factory=list)
 
     def name(self, path: Path) -> str:
-        """The path as the racer sees it: relative to the run folder."""
-        return path.relative_to(self.root).as_posix()
+        """The path as the racer sees it: relative to the run folder, printable (a name that is
+        not UTF-8 is shown with its bytes escaped)."""
+        return printable(path.relative_to(self.root).as_posix())
 
     @property
     def layout(self) -> SourceLayout:
@@ -50,11 +66,26 @@ class RunFiles:
             return SourceLayout.CONSOLE
         return SourceLayout.PLAIN
 
+    def top_folder(self, path: Path) -> str | None:
+        """The folder of the run folder's top level the file is in (None: at the top)."""
+        parts = path.relative_to(self.root).parts
+        return parts[0] if len(parts) > 1 else None
+
 
 def find_run_files(root: Path) -> RunFiles:
     if not root.is_dir():
         raise AssemblyError(str(root), "", "is not a folder or a .tar.gz archive")
     found = RunFiles(root=root)
+    sniffed = 0
+    for path in _files_of(root):
+        if not _classify_by_name(found, path) and _sniffable(path) and sniffed < limits.MAX_SNIFFED_FILES:
+            sniffed += 1
+            _classify_by_content(found, path)
+    return found
+
+
+def _files_of(root: Path) -> Iterator[Path]:
+    """The run folder's regular files, in name order, leaving out hidden ones."""
     seen = 0
     for folder, dirs, files in os.walk(root):
         dirs[:] = sorted(d for d in dirs if not d.startswith("."))
@@ -63,9 +94,8 @@ def find_run_files(root: Path) -> RunFiles:
             if seen > limits.MAX_FILES_SCANNED:
                 raise AssemblyError(str(root), "", f"holds more than {limits.MAX_FILES_SCANNED} files")
             path = Path(folder, filename)
-            if _regular_file_inside(path, root):
-                _classify(found, path)
-    return found
+            if not filename.startswith(".") and _regular_file_inside(path, root):
+                yield path
 
 
 def evaluation_files(root: Path) -> list[str]:
@@ -88,10 +118,8 @@ def _regular_file_inside(path: Path, root: Path) -> bool:
         return False
 
 
-def _classify(found: RunFiles, path: Path) -> None:
+def _classify_by_name(found: RunFiles, path: Path) -> bool:
     name = path.name
-    parent = path.parent.name.lower()
-    under_metrics = path.parent.parent.name.lower() == "metrics"
     if name.lower().endswith(".log"):
         found.logs.append(path)
     elif name == "model_metadata.json":
@@ -100,14 +128,62 @@ def _classify(found: RunFiles, path: Path) -> None:
         found.hyperparameters.append(path)
     elif _PARAMS.match(name):
         found.params.append(path)
-    elif name.lower().endswith(".json") and (
-        _EVALUATION.match(name) or (parent in ("evaluation", "submission") and under_metrics)
-    ):
+    elif _is_metrics_name(path, _EVALUATION, ("evaluation", "submission")):
         found.evaluation_metrics.append(path)
-    elif name.lower().endswith(".json") and (
-        _TRAINING.match(name) or (parent == "training" and under_metrics)
-    ):
+    elif _is_metrics_name(path, _TRAINING, ("training",)):
         found.training_metrics.append(path)
+    else:
+        return False
+    return True
+
+
+def _is_metrics_name(path: Path, pattern: re.Pattern[str], folders: tuple[str, ...]) -> bool:
+    if not path.name.lower().endswith(".json"):
+        return False
+    under_metrics = path.parent.parent.name.lower() == "metrics"
+    return bool(pattern.match(path.name)) or (path.parent.name.lower() in folders and under_metrics)
+
+
+def _sniffable(path: Path) -> bool:
+    in_simtrace = any(part.lower().endswith(("simtrace", "sim-trace")) for part in path.parent.parts)
+    return path.suffix.lower() not in _NEVER_SNIFFED and not in_simtrace
+
+
+def _classify_by_content(found: RunFiles, path: Path) -> None:
+    head = _head(path)
+    if head is None or b"\x00" in head:
+        return
+    if (kind := _metrics_kind(head)) is not None:
+        (found.evaluation_metrics if kind == "evaluation" else found.training_metrics).append(path)
+    elif any(marker in head for marker in _LOG_MARKERS):
+        found.logs.append(path)
+
+
+def _head(path: Path) -> bytes | None:
+    try:
+        descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError:
+        return None
+    with os.fdopen(descriptor, "rb") as handle:
+        try:
+            return handle.read(limits.SNIFF_BYTES)
+        except OSError:
+            return None
+
+
+def _metrics_kind(head: bytes) -> str | None:
+    """"training" or "evaluation" for the head of a metrics file, by its first entry's keys."""
+    if not head.lstrip().startswith(b"{"):
+        return None
+    match = _METRICS.search(head)
+    if match is None:
+        return None
+    entry = match["entry"]
+    if any(key in entry for key in _TRAINING_KEYS):
+        return "training"
+    if any(key in entry for key in _EVALUATION_KEYS):
+        return "evaluation"
+    return None
 
 
 def shallowest(paths: list[Path], root: Path) -> Path | None:

@@ -1,22 +1,18 @@
-"""Training and evaluation metrics files -> evaluation runs and the training summary."""
+"""Evaluation metrics files -> evaluation runs (training metrics: training.py)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
-from pydantic.dataclasses import dataclass
 
 from . import limits
 from .errors import AssemblyError
 from .reading import from_validation_error, validate_json
-from .record import Count, CurvePoint, EvaluationRun, Figure, Lap, Moment, Percent, TrainingSummary
+from .record import Count, EvaluationRun, Lap, Moment, Percent
 
 # The record's own bounds, so that a file past them is refused naming its own field.
 Trial = Annotated[int, Field(ge=0, le=100_000)]
-Episode = Annotated[int, Field(ge=0, le=100_000_000)]
-Finite = Annotated[Figure, Field(allow_inf_nan=False)]
 
 
 class _Entry(BaseModel):
@@ -37,28 +33,9 @@ class _EvaluationEntry(_Entry):
     metric_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
 
 
-@dataclass(slots=True, config=ConfigDict(extra="ignore"))
-class _TrainingEntry:
-    # A slotted dataclass, not a model: a 50 MB file holds some 200,000 of these.
-    completion_percentage: Percent
-    elapsed_time_in_milliseconds: Annotated[int, Field(ge=0, le=limits.MAX_LAP_MS)]
-    episode_status: Annotated[str, Field(max_length=32)] = ""
-    trial: Trial = 0
-    episode: Episode = 0
-    phase: Annotated[str, Field(max_length=32)] = "training"
-    reward_score: Finite = 0.0
-    start_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
-    metric_time: Annotated[Moment, Field(allow_inf_nan=False)] | None = None
-
-
 class _EvaluationFile(BaseModel):
     model_config = ConfigDict(extra="ignore")
     metrics: list[_EvaluationEntry]
-
-
-class _TrainingFile(BaseModel):
-    model_config = ConfigDict(extra="ignore")
-    metrics: list[_TrainingEntry]
 
 
 def load_evaluation(data: bytes, name: str) -> EvaluationRun:
@@ -89,59 +66,3 @@ def _lap(number: int, entry: _EvaluationEntry) -> Lap:
         immobilized=entry.immobilized_count,
         reversed=entry.reversed_count,
     )
-
-
-def load_training(files: Iterable[tuple[bytes, str]], training_track: str | None) -> TrainingSummary:
-    """Summarise one or more training metrics files (one per DeepRacer-for-Cloud worker).
-
-    ``files`` may be a generator, so that only one file's bytes are in memory at a time."""
-    episodes: list[_TrainingEntry] = []
-    duration_s = 0.0
-    for data, name in files:
-        entries = validate_json(_TrainingFile, data, name).metrics
-        training = [e for e in entries if e.phase.strip().lower() == "training"]
-        episodes.extend(training)
-        duration_s = max(duration_s, _duration_s(entries))
-        del entries
-    rewards = [e.reward_score for e in episodes]
-    completions = [e.completion_percentage for e in episodes]
-    return TrainingSummary(
-        track=training_track,
-        episodes=len(episodes),
-        training_time_s=round(duration_s, 1),
-        best_reward=max(rewards) if rewards else None,
-        mean_reward=_round(sum(rewards) / len(rewards)) if rewards else None,
-        best_completion_pct=max(completions, default=0.0),
-        mean_completion_pct=_round(sum(completions) / len(completions)) if completions else 0.0,
-        completed_laps=sum(1 for c in completions if c >= 100),
-        curve=_curve(episodes),
-    )
-
-
-def _duration_s(entries: list[_TrainingEntry]) -> float:
-    starts = [e.start_time for e in entries if e.start_time is not None]
-    ends = [e.metric_time for e in entries if e.metric_time is not None]
-    if not starts or not ends:
-        return sum(e.elapsed_time_in_milliseconds for e in entries) / 1000
-    return max(0.0, (max(ends) - min(starts)) / 1000)
-
-
-def _curve(episodes: list[_TrainingEntry]) -> list[CurvePoint]:
-    """At most MAX_CURVE_POINTS points: the mean reward and completion of equal buckets."""
-    ordered = sorted(episodes, key=lambda e: e.episode)
-    if not ordered:
-        return []
-    buckets = min(limits.MAX_CURVE_POINTS, len(ordered))
-    points = []
-    for index in range(buckets):
-        chunk = ordered[index * len(ordered) // buckets:(index + 1) * len(ordered) // buckets]
-        points.append(CurvePoint(
-            episode=chunk[-1].episode,
-            reward=_round(sum(e.reward_score for e in chunk) / len(chunk)),
-            completion_pct=_round(sum(e.completion_percentage for e in chunk) / len(chunk)),
-        ))
-    return points
-
-
-def _round(value: float) -> float:
-    return round(value, 2)

@@ -6,6 +6,7 @@ so every accessor normalises them.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from pathlib import PurePosixPath
@@ -52,6 +53,36 @@ class RunParams:
         if text.lower() in _FALSE:
             return False
         raise AssemblyError(self.name, key, f"expected true or false, found {text!r}")
+
+    def number(self, key: str, low: float, high: float) -> float | None:
+        """The value as a number within low..high, None where the parameters leave it out."""
+        text = self.text(key)
+        if text is None or text.lower() in ("none", "null"):
+            return None
+        try:
+            value = float(text) if len(text) <= 32 else math.nan
+        except ValueError:
+            value = math.nan
+        if not low <= value <= high:  # also NaN
+            raise AssemblyError(self.name, key, f"expected a number from {low:g} to {high:g}, "
+                                f"found {text[:40]!r}")
+        return value
+
+    def whole(self, key: str, low: int, high: int) -> int | None:
+        """The value as a whole number within low..high, None where it is left out."""
+        value = self.number(key, low, high)
+        if value is None:
+            return None
+        if not value.is_integer():
+            raise AssemblyError(self.name, key, f"expected a whole number, found {value:g}")
+        return int(value)
+
+    def items(self, key: str) -> int | None:
+        """How many items a list value holds, None where the key is left out."""
+        value = self.values.get(key)
+        if value is None:
+            return None
+        return len(value) if isinstance(value, list) else None
 
     @property
     def metrics_file(self) -> str | None:

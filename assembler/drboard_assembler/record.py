@@ -31,13 +31,14 @@ from .aliases import alias_problem, text_problem, texts
 from .catalog import default_catalog
 
 SCHEMA_VERSION: Literal[1] = 1
-#: Laps faster than the track's length driven at this multiple of the top speed are refused.
+#: Laps faster than the track's shortest lap driven at this multiple of the top speed are refused
+#: (the board flags, but keeps, laps faster than it at the top speed itself).
 PLAUSIBLE_SPEED_FACTOR = 2.0
 #: The top speed a DeepRacer action space can ask for, in m/s: whatever a record claims, no lap
-#: is timed as if the car went faster.
+#: is timed as if the car went faster; a model whose action space is unknown is taken at it.
 TOP_SPEED_BOUND_MPS = 4.0
 #: No complete lap is faster than this, on any track, custom tracks included (the shortest
-#: official track, 16.6 m, takes 2.08 s at twice the top speed bound).
+#: official lap, 12.3 m on the A to Z Speedway, takes 3.1 s at the top speed bound).
 MIN_LAP_MS = 2000
 #: Every other figure a record holds (rewards, hyperparameters) lies within ±this.
 MAX_MAGNITUDE = 1e9
@@ -81,6 +82,10 @@ Whole = Annotated[int, Field(ge=-int(MAX_MAGNITUDE), le=int(MAX_MAGNITUDE))]
 Moment = Annotated[float, Field(ge=0, le=1e14)]
 Sha256 = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
 Count = Annotated[int, Field(ge=0, le=1_000_000)]
+#: A number of training episodes: a weeks-long training of several workers runs past a million.
+Episodes = Annotated[int, Field(ge=0, le=100_000_000)]
+#: A time penalty, in seconds.
+Penalty = Annotated[float, Field(ge=0, le=3600)]
 Percent = Annotated[float, Field(ge=0, le=100)]
 
 
@@ -127,6 +132,30 @@ class Lap(Strict):
         return self.completion_pct >= 100
 
 
+class Conditions(Strict):
+    """The rules an evaluation ran under, as its parameters state them (None where they do not).
+
+    The simulator times a lap from its start to its end, the pauses of its penalties included:
+    an off-track (or a collision) with resets allowed stops the car for the penalty's seconds, so
+    a lap's time and a run's total already hold every penalty, as the league timed them.
+    """
+
+    off_track_penalty_s: Penalty | None = None
+    collision_penalty_s: Penalty | None = None
+    #: How many resets an off-track or a crash may use before the lap ends (0: none).
+    max_resets: Annotated[int, Field(ge=0, le=1_000_000)] | None = None
+    trials: Annotated[int, Field(ge=1, le=100_000)] | None = None
+    continuous: bool | None = None
+    obstacles: Annotated[int, Field(ge=0, le=1000)] | None = None
+    bots: Annotated[int, Field(ge=0, le=1000)] | None = None
+    #: The file that states them: evaluation parameters or the evaluation's log.
+    source: Text | None = None
+
+    def stated(self) -> dict[str, Any]:
+        """The conditions the parameters state, by name (the source left out)."""
+        return self.model_dump(exclude={"source"}, exclude_none=True)
+
+
 class EvaluationRun(Strict):
     """One evaluation (one metrics file): its laps and the figures derived from them."""
 
@@ -142,10 +171,12 @@ class EvaluationRun(Strict):
     #: Whether evaluation parameters in the run folder name this metrics file (None: the
     #: folder held no evaluation parameters).
     named_by_params: bool | None = None
+    conditions: Conditions | None = None
 
     @classmethod
-    def from_laps(cls, source: str, laps: list[Lap]) -> "EvaluationRun":
-        return cls(source=source, laps=laps, **_derived(laps))
+    def from_laps(cls, source: str, laps: list[Lap],
+                  conditions: Conditions | None = None) -> "EvaluationRun":
+        return cls(source=source, laps=laps, conditions=conditions, **_derived(laps))
 
     @model_validator(mode="after")
     def _figures_match_laps(self) -> Self:
@@ -242,33 +273,51 @@ class Hyperparameters(Strict):
                      Field(max_length=limits.MAX_HYPERPARAMETERS)] = Field(default_factory=dict)
 
 
-class Design(Strict):
-    """How the model was built: what the board shows racers besides times."""
+class DesignSources(Strict):
+    """The file of the run folder each design fact was read from (None: the fact is unknown)."""
 
-    algorithm: Literal["clipped_ppo", "sac"]
-    action_space: ActionSpace
+    algorithm: Text | None = None
+    action_space: Text | None = None
+    sensors: Text | None = None
+    neural_network: Text | None = None
+    metadata_version: Text | None = None
+    hyperparameters: Text | None = None
+
+
+class Design(Strict):
+    """How the model was built: what the board shows racers besides times. Each fact is the
+    evaluated model's, or None (unknown) where the run's files do not state it; records stored
+    before facts could be unknown hold them all."""
+
+    algorithm: Literal["clipped_ppo", "sac"] | None = None
+    action_space: ActionSpace | None = None
     sensors: Annotated[list[Annotated[str, StringConstraints(max_length=32)]],
-                       Field(max_length=limits.MAX_SENSORS)]
+                       Field(max_length=limits.MAX_SENSORS)] | None = None
     neural_network: Annotated[str, StringConstraints(max_length=64)] | None = None
     metadata_version: Annotated[str, StringConstraints(max_length=16)] | None = None
-    hyperparameters: Hyperparameters
+    hyperparameters: Hyperparameters | None = None
+    sources: DesignSources | None = None
+
+    @property
+    def max_speed(self) -> float | None:
+        return self.action_space.max_speed if self.action_space is not None else None
 
 
 class CurvePoint(Strict):
-    episode: Count
+    episode: Episodes
     reward: Figure
     completion_pct: Percent
 
 
 class TrainingSummary(Strict):
     track: Annotated[str, StringConstraints(max_length=limits.MAX_NAME_CHARS)] | None = None
-    episodes: Count
+    episodes: Episodes
     training_time_s: Annotated[float, Field(ge=0, le=MAX_MAGNITUDE)]
     best_reward: Figure | None
     mean_reward: Figure | None
     best_completion_pct: Percent
     mean_completion_pct: Percent
-    completed_laps: Count
+    completed_laps: Episodes
     curve: Annotated[list[CurvePoint], Field(max_length=limits.MAX_CURVE_POINTS)]
 
 
@@ -335,7 +384,7 @@ class Record(Strict):
             raise ValueError(f"track {self.track!r} is not an official WORLD_NAME")
 
     def _check_lap_times(self) -> None:
-        problem = implausible_lap(self.track, self.design.action_space.max_speed, self.evaluations)
+        problem = implausible_lap(self.track, self.design.max_speed, self.evaluations)
         if problem:
             raise ValueError(f"{problem.run.source}: {problem.message}")
 
@@ -352,39 +401,54 @@ class ImplausibleLap(NamedTuple):
     message: str
 
 
-def implausible_lap(track_id: str, max_speed: float,
-                    runs: list[EvaluationRun]) -> ImplausibleLap | None:
-    """The first complete lap under MIN_LAP_MS, or faster than the track's length (where it is
-    known) driven at PLAUSIBLE_SPEED_FACTOR times the top speed: the model's, and never more
-    than TOP_SPEED_BOUND_MPS whatever the model claims."""
+def top_speed(max_speed: float | None) -> float:
+    """The speed a model's laps are checked against: its action space's top speed, never more
+    than TOP_SPEED_BOUND_MPS, and that bound where the action space is unknown."""
+    return TOP_SPEED_BOUND_MPS if max_speed is None else min(max_speed, TOP_SPEED_BOUND_MPS)
+
+
+def lap_floor_ms(track_id: str, max_speed: float | None) -> float | None:
+    """The fastest lap a model can drive on an official track: the shortest closed path the
+    car's centre can take without going off track, at the model's top speed (None for a track
+    whose shape the catalog does not hold)."""
     track = default_catalog().get(track_id)
-    speed = min(max_speed, TOP_SPEED_BOUND_MPS)
-    fastest_ms = float(MIN_LAP_MS)
-    if track is not None:
-        fastest_ms = max(fastest_ms, 1000 * track.length_m / (speed * PLAUSIBLE_SPEED_FACTOR))
+    if track is None:
+        return None
+    return 1000 * track.shortest_lap_m / top_speed(max_speed)
+
+
+def implausible_lap(track_id: str, max_speed: float | None,
+                    runs: list[EvaluationRun]) -> ImplausibleLap | None:
+    """The first complete lap under MIN_LAP_MS, or faster than the track's shortest lap (where
+    it is known) driven at PLAUSIBLE_SPEED_FACTOR times the top speed."""
+    floor = lap_floor_ms(track_id, max_speed)
+    fastest_ms = max(float(MIN_LAP_MS), floor / PLAUSIBLE_SPEED_FACTOR if floor else 0.0)
     for run in runs:
         for index, lap in enumerate(run.laps):
             if lap.complete and lap.time_ms < fastest_ms:
-                return ImplausibleLap(run, index, _too_fast(lap, track_id, track, speed, fastest_ms))
+                return ImplausibleLap(run, index, _too_fast(lap, track_id, max_speed, fastest_ms))
     return None
 
 
-def _too_fast(lap: Lap, track_id: str, track: Any, speed: float, fastest_ms: float) -> str:
+def _too_fast(lap: Lap, track_id: str, max_speed: float | None, fastest_ms: float) -> str:
     said = f"lap {lap.trial} time {lap.time_ms} ms is faster than possible: "
+    track = default_catalog().get(track_id)
     if track is None or fastest_ms <= MIN_LAP_MS:
         return said + f"no complete lap takes under {MIN_LAP_MS} ms"
-    return said + (f"no lap of {track_id} ({track.length_m} m) takes under {fastest_ms:.0f} ms at a "
-                   f"top speed of {speed:g} m/s")
+    return said + (f"the shortest lap of {track_id} ({track.shortest_lap_m:g} m) takes "
+                   f"{fastest_ms:.0f} ms at twice a top speed of {top_speed(max_speed):g} m/s")
 
 
 #: Fields added to the record after its first version: left out of its content hash while they
 #: are empty, so that records stored before them keep their submission id.
 _LATER_LAP_FIELDS = ("started_ms", "ended_ms", "immobilized", "reversed")
-_LATER_RUN_FIELDS = ("named_by_params",)
+_LATER_RUN_FIELDS = ("named_by_params", "conditions")
+_LATER_DESIGN_FIELDS = ("sources",)
 
 
 def content_hash(record: Record) -> str:
     content = record.model_dump(mode="json", exclude={"submission_id", "assembler_version"})
+    _drop_empty(content["design"], _LATER_DESIGN_FIELDS)
     for run in content["evaluations"]:
         _drop_empty(run, _LATER_RUN_FIELDS)
         for lap in run["laps"]:

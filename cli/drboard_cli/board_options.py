@@ -124,6 +124,42 @@ class Count(_OptionType):
         return int(text)
 
 
+class Requirement(_OptionType):
+    """``CONDITION=VALUE``: an evaluation condition a board requires (see CONDITIONS)."""
+
+    name = "condition"
+
+    def parse(self, text: str) -> tuple[str, Any]:
+        return parse_requirement(text)
+
+
+#: The conditions a board can require, as typed, and the field each sets.
+CONDITIONS = {"off-track-penalty": "off_track_penalty_s", "collision-penalty": "collision_penalty_s",
+              "resets": "max_resets", "trials": "trials", "continuous": "continuous",
+              "obstacles": "obstacles", "bots": "bots"}
+_YES, _NO = {"yes", "true", "on", "1"}, {"no", "false", "off", "0"}
+
+
+def parse_requirement(text: str) -> tuple[str, Any]:
+    """``off-track-penalty=5`` (seconds, ``5s`` too), ``trials=3``, ``continuous=yes``."""
+    name, _, value = text.partition("=")
+    field = CONDITIONS.get(name.strip().lower())
+    if field is None or not value.strip():
+        raise ValueError(f"{text!r} is not CONDITION=VALUE; the conditions are "
+                         + ", ".join(CONDITIONS))
+    value = value.strip().lower()
+    if field == "continuous":
+        if value not in _YES | _NO:
+            raise ValueError(f"{text!r}: continuous is yes or no")
+        return field, value in _YES
+    number = value.removesuffix("s") if field.endswith("_s") else value
+    try:
+        return field, float(number) if field.endswith("_s") else int(number)
+    except ValueError:
+        kind = "seconds" if field.endswith("_s") else "a whole number"
+        raise ValueError(f"{text!r}: {name.strip()} takes {kind}") from None
+
+
 BOARD_ID_RULE = "letters, digits, `_`, `-` and `.`, up to 64, starting with a letter or digit"
 
 #: The option each field of a board comes from, to name it in an error.
@@ -132,21 +168,35 @@ OPTION_OF_FIELD = {
     "custom_track": "--custom-track", "clockwise": "--clockwise", "race_type": "--race-type",
     "method": "--method", "min_laps": "--min-laps", "opens_at": "--opens-at",
     "closes_at": "--closes-at", "cooldown_s": "--cooldown", "max_submissions": "--max-submissions",
-    "flagged_runs": "--flagged-runs", "designs": "--designs",
+    "flagged_runs": "--flagged-runs", "designs": "--designs", "conditions": "--require",
 }
 _FIELD_OF_OPTION = {
     "board_id": "board_id", "title": "title", "description": "description", "track": "track",
     "custom_track": "custom_track", "clockwise": "clockwise", "race_type": "race_type",
     "method": "method", "min_laps": "min_laps", "opens_at": "opens_at", "closes_at": "closes_at",
     "cooldown": "cooldown_s", "max_submissions": "max_submissions", "flagged_runs": "flagged_runs",
-    "designs": "designs",
+    "designs": "designs", "require": "conditions",
 }
+
+
+def _conditions(given: tuple[Any, ...]) -> Any:
+    """The --require options given, as the board's conditions (CLEAR when one is `none`); None
+    when none is given."""
+    if not given:
+        return None
+    if any(value is CLEAR for value in given):
+        if len(given) > 1:
+            raise click.BadParameter("`none` clears the conditions: give it alone",
+                                     param_hint="'--require'")
+        return CLEAR
+    return dict(given)
 
 
 def board_spec(options: Mapping[str, Any]) -> BoardSpec:
     """A new board from the options of ``drboard board create`` (unset ones take the defaults)."""
     from drboard_functions.models.requests import BoardSpec
 
+    options = {**options, "require": _conditions(tuple(options.get("require") or ()))}
     fields = {_FIELD_OF_OPTION[name]: value for name, value in options.items() if value is not None}
     opens_at, closes_at = fields.get("opens_at"), fields.get("closes_at")
     if opens_at and closes_at and closes_at <= opens_at:
@@ -159,6 +209,7 @@ def board_changes(options: Mapping[str, Any]) -> BoardChanges:
     from drboard_functions.models.requests import BoardChanges
 
     fields: dict[str, Any] = {}
+    options = {**options, "require": _conditions(tuple(options.get("require") or ()))}
     for name, value in options.items():
         if value is None:
             continue

@@ -33,13 +33,13 @@ FAILURE = 1
 #: board id taken, a board that cannot change. Named, so that nothing is imported to start.
 BAD_INPUT_ERRORS = frozenset({"InvalidSubmission", "SubmissionTooLarge", "BoardMismatch",
                               "InvalidQuery", "BoardExists", "BoardLocked", "UnreadableBody",
-                              "UnsupportedBody"})
+                              "UnsupportedBody", "SeasonExists", "SeasonLocked"})
 #: The domain errors that are failures (exit 1): nothing found, a closed board, a used-up
 #: submission limit, a cooldown, a refusal, the board unreachable or too busy to answer.
 FAILURE_ERRORS = frozenset({"BoardNotFound", "RacerNotFound", "WebhookNotFound", "TooSoon", "BoardClosed",
                             "DesignsPrivate", "SubmissionLimitReached", "NotAuthorized",
                             "CopiedRun", "BoardUnreachable", "StoreError", "StoreBusy",
-                            "StoreUnavailable", "StoreFailed"})
+                            "StoreUnavailable", "StoreFailed", "SeasonNotFound", "NotQualified"})
 
 
 @cache
@@ -227,6 +227,9 @@ COMMANDS: dict[str, LazyCommand] = {
                                        "another board."),
           ("import", "import_command", "Load a `drboard export` file into this board; importing "
                                        "twice changes nothing.")),
+    **_at("seasons",
+          ("season", "season_group", "Organisers: make a season out of boards, with points, "
+                                     "best-of, weights and a final.")),
     **_at("aliases",
           ("aliases", "aliases_group", "Organisers: reserve racers' aliases, give one to a "
                                       "sign-in, release one."),

@@ -35,6 +35,15 @@ from drboard_functions.models.requests import (
     BoardSpec,
     ImportedSubmission,
 )
+from drboard_functions.models.seasons import (
+    FinalSpec,
+    RoundSpec,
+    SeasonChanges,
+    SeasonList,
+    SeasonSpec,
+    SeasonStandings,
+    SeasonSummary,
+)
 from drboard_functions.models.transfer import ExportPage, ImportReceipt
 from drboard_functions.models.views import (
     AliasList,
@@ -65,7 +74,7 @@ from .joins import Joined, JoinRequest
 from .login import fresh_token
 
 T = TypeVar("T", bound=BaseModel)
-P = TypeVar("P", BoardList, RacerHistory, RacerView)
+P = TypeVar("P", BoardList, RacerHistory, RacerView, SeasonList)
 
 TIMEOUT_S = 20
 DEFAULT_RETRY_AFTER_S = 60
@@ -207,6 +216,49 @@ class HttpBoard:
         answer = self._call("GET", f"/boards/{_quote(board_id)}/audit",
                             query={"cursor": cursor, "limit": str(limit)}, signed=True)
         return _parse(AuditPage, answer)
+
+    # ---- seasons (reads public, changes signed) -------------------------------------------
+
+    def seasons(self) -> list[SeasonSummary]:
+        """Every season, following the pages."""
+        return [season for page in self._pages(SeasonList, "/seasons", {}) for season in page.seasons]
+
+    def season(self, season_id: str, limit: int, cursor: str | None) -> SeasonStandings:
+        answer = self._call("GET", f"/seasons/{_quote(season_id)}",
+                            query={"limit": str(limit), "cursor": cursor})
+        return _parse(SeasonStandings, answer)
+
+    def create_season(self, spec: SeasonSpec) -> SeasonStandings:
+        return _parse(SeasonStandings, self._call("POST", "/seasons", body=spec, signed=True))
+
+    def update_season(self, season_id: str, changes: SeasonChanges) -> SeasonStandings:
+        body = changes.model_dump_json(exclude_unset=True).encode("utf-8")
+        answer = self._call("PATCH", f"/seasons/{_quote(season_id)}", body=body, signed=True)
+        return _parse(SeasonStandings, answer)
+
+    def add_round(self, season_id: str, board_id: str, spec: RoundSpec) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/rounds/{_quote(board_id)}"
+        return _parse(SeasonStandings, self._call("PUT", path, body=spec, signed=True))
+
+    def remove_round(self, season_id: str, board_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/rounds/{_quote(board_id)}"
+        return _parse(SeasonStandings, self._call("DELETE", path, signed=True))
+
+    def set_final(self, season_id: str, spec: FinalSpec) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/final"
+        return _parse(SeasonStandings, self._call("PUT", path, body=spec, signed=True))
+
+    def clear_final(self, season_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/final"
+        return _parse(SeasonStandings, self._call("DELETE", path, signed=True))
+
+    def close_season(self, season_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/close"
+        return _parse(SeasonStandings, self._call("POST", path, signed=True))
+
+    def reopen_season(self, season_id: str) -> SeasonStandings:
+        path = f"/seasons/{_quote(season_id)}/reopen"
+        return _parse(SeasonStandings, self._call("POST", path, signed=True))
 
     def recheck_page(self, board_id: str, cursor: str | None) -> RecheckPage:
         answer = self._call("POST", f"/boards/{_quote(board_id)}/recheck", query={"cursor": cursor},

@@ -15,9 +15,11 @@ from collections.abc import Iterable
 from datetime import UTC, datetime, timedelta
 from typing import IO, TYPE_CHECKING, Any
 
+from drboard_functions import conditions
 from drboard_functions.display import (
     DASH,
     PRIVATE_DESIGN,
+    UNKNOWN,
     algorithm_name,
     design_summary,
     duration,
@@ -84,6 +86,9 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     board = page.board
     wide = width >= 110
     caption = f"{board.participants} racers · {method_label(board)}"
+    if board.conditions is not None:
+        caption += f" · evaluated with {conditions.summary(board.conditions)}"
+    caption += " · times include penalties"
     if any(entry.flags for entry in page.entries):
         caption += f" · {FLAG_MARK} flagged by the board's checks"
     table = Table(title=Text(f"{board.title} · {board.board_id}"), caption=Text(caption),
@@ -96,6 +101,10 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     table.add_column("Gap", justify="right", no_wrap=True)
     table.add_column("Laps", justify="right")
     table.add_column("Design")
+    # a default board takes runs of any conditions: each entry says its own
+    each_conditions = wide and board.conditions is None
+    if each_conditions:
+        table.add_column("Conditions")
     if wide:
         table.add_column("Submitted", no_wrap=True)
     for entry in page.entries:
@@ -104,6 +113,8 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
             cells.append(entry.model_name)
         cells += [_time_label(entry), gap(entry.gap_ms), str(entry.laps_completed),
                   design_summary(entry.design)]
+        if each_conditions:
+            cells.append(conditions.short(entry.conditions))
         if wide:
             cells.append(entry.submitted_at.strftime("%b %d %H:%M"))
         _row(table, *cells, style=None if entry.qualified else "dim")
@@ -167,6 +178,8 @@ def board_panel(board: BoardView) -> Panel:
     _row(grid, "Timing", method_label(board))
     _row(grid, "Flagged runs", "rank" if board.flagged_runs == "rank"
                  else "shown below the qualified racers, unranked")
+    _row(grid, "Conditions", conditions.summary(board.conditions) if board.conditions
+         else "any (each entry shows its own)")
     _row(grid, "Opens", when(board.opens_at) if board.opens_at else "when created")
     _row(grid, "Closes", when(board.closes_at) if board.closes_at else "never")
     cooldown = f"{duration(board.cooldown_s)} between a racer's submissions" if board.cooldown_s else "none"
@@ -216,7 +229,7 @@ def progress(console: Console) -> Progress:
 
 CSV_FIELDS = ["rank", "racer", "model_name", "qualified", "time_s", "gap_s", "best_lap_s",
               "laps_completed", "best_completion_pct", "algorithm", "action_space", "actions",
-              "max_speed", "max_steering", "submitted_at", "submission_id"]
+              "max_speed", "max_steering", "submitted_at", "submission_id", "conditions"]
 
 
 def _flat(entry: EntryView) -> dict[str, Any]:
@@ -229,15 +242,20 @@ def _flat(entry: EntryView) -> dict[str, Any]:
         "best_lap_s": s(entry.best_lap_ms), "laps_completed": entry.laps_completed,
         "best_completion_pct": entry.best_completion_pct,
         "submitted_at": entry.submitted_at.isoformat(), "submission_id": entry.submission_id,
+        "conditions": conditions.short(entry.conditions),
     } | _flat_design(entry.design)
 
 
 def _flat_design(design: Design | None) -> dict[str, Any]:
+    """The design's columns: empty while the board keeps designs private, ``unknown`` where the
+    run's files do not state a fact."""
     if design is None:  # the board keeps designs private until it closes
         return dict.fromkeys(("algorithm", "action_space", "actions", "max_speed", "max_steering"), "")
-    return {"algorithm": design.algorithm, "action_space": design.action_space,
-            "actions": design.actions or "", "max_speed": design.max_speed,
-            "max_steering": design.max_steering}
+    space_known = design.action_space is not None
+    return {"algorithm": design.algorithm or UNKNOWN, "action_space": design.action_space or UNKNOWN,
+            "actions": design.actions or ("" if space_known else UNKNOWN),
+            "max_speed": design.max_speed if space_known else UNKNOWN,
+            "max_steering": design.max_steering if space_known else UNKNOWN}
 
 
 def csv_cell(value: Any) -> Any:
@@ -557,17 +575,37 @@ def racer_panel(view: RacerView) -> Group:
     _row(summary, "Model", f"{record.model_name} ({record.source_layout.value} files)")
     design = record.design
     _row(summary, "Algorithm", algorithm_name(design.algorithm))
-    _row(summary, "Network", design.neural_network or DASH)
-    _row(summary, "Sensors", ", ".join(design.sensors) or DASH)
-    if record.training:
-        t = record.training
-        _row(summary, "Training", f"{t.episodes} episodes on {t.track or DASH}, "
-                        f"{duration(int(t.training_time_s))}, best reward {t.best_reward}, "
-                        f"{t.completed_laps} laps completed")
+    _row(summary, "Network", design.neural_network or (UNKNOWN if design.sensors is None else DASH))
+    _row(summary, "Sensors", UNKNOWN if design.sensors is None else ", ".join(design.sensors) or DASH)
+    _row(summary, "Read from", design_sources(record))
+    _row(summary, "Training", training_line(record))
+    _row(summary, "Conditions", conditions.summary(entry.conditions)
+         or "unknown: the evaluation's parameters state none")
+    _row(summary, "", Text(conditions.PENALTIES_NOTE, style="dim"))
     if entry.flags:
         _row(summary, f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
     return Group(summary, hyperparameter_table(record), action_space_table(record),
                  laps_table(record))
+
+
+def training_line(record: Record) -> str:
+    if record.training is None:
+        return "unknown: the run's files hold no training metrics"
+    t = record.training
+    return (f"{t.episodes} episodes on {t.track or UNKNOWN}, {duration(int(t.training_time_s))}, "
+            f"best reward {t.best_reward}, {t.completed_laps} laps completed")
+
+
+def design_sources(record: Record) -> str:
+    """Where each design fact was read: ``action space, algorithm, sensors: model_metadata.json;
+    hyperparameters: ip/hyperparameters.json``; a fact no file states, as unknown."""
+    sources = record.design.sources
+    if sources is None:  # a record from before the sources were kept
+        return "the run's files (kept before drboard named each fact's file)"
+    by_file: dict[str, list[str]] = {}
+    for fact, name in sources.model_dump().items():
+        by_file.setdefault(name or UNKNOWN, []).append(fact.replace("_", " "))
+    return "; ".join(f"{', '.join(facts)}: {name}" for name, facts in by_file.items())
 
 
 def comparison_table(comparison: Comparison) -> Table:
@@ -581,7 +619,8 @@ def comparison_table(comparison: Comparison) -> Table:
                               f"{_time_label(compared.entry)})"))
     for fact, label in LABELS.items():
         differs = fact in comparison.differences
-        values = [fact_text(fact, getattr(c.facts, fact)) for c in comparison.racers]
+        values = [fact_text(fact, getattr(c.facts, fact), fact in c.facts.unknown)
+                  for c in comparison.racers]
         _row(table, "≠" if differs else "", label, *values, style="bold" if differs else None)
     return table
 
@@ -604,18 +643,30 @@ def _share(share: float | None) -> str:
 
 
 def hyperparameter_table(record: Record) -> Table:
+    hyper = record.design.hyperparameters
+    if hyper is None:
+        return _unknown_table("Hyperparameters", "unknown: neither a hyperparameters.json nor the "
+                              "model's training log is in the run's files")
     table = Table(title=Text("Hyperparameters"), header_style="bold")
     table.add_column("Name")
     table.add_column("Value", justify="right")
-    values = record.design.hyperparameters.model_dump(exclude={"other"}, exclude_none=True)
-    values |= record.design.hyperparameters.other
+    values = hyper.model_dump(exclude={"other"}, exclude_none=True) | hyper.other
     for name, value in sorted(values.items()):
         _row(table, name, str(value))
     return table
 
 
+def _unknown_table(title: str, text: str) -> Table:
+    table = Table(title=Text(title), show_header=False)
+    table.add_column("")
+    _row(table, text)
+    return table
+
+
 def action_space_table(record: Record) -> Table:
     space = record.design.action_space
+    if space is None:
+        return _unknown_table("Action space", "unknown: the run's files do not describe it")
     if space.type == "continuous" and space.speed and space.steering_angle:
         table = Table(title=Text("Action space (continuous)"), header_style="bold")
         table.add_column("")
@@ -637,13 +688,13 @@ def action_space_table(record: Record) -> Table:
 
 def laps_table(record: Record) -> Table:
     table = Table(title=Text("Evaluation laps"), header_style="bold")
-    for name in ("Run", "Lap", "Time", "Done", "Status", "Off track", "Crashes"):
+    for name in ("Run", "Lap", "Time", "Done", "Status", "Off track", "Crashes", "Resets"):
         table.add_column(name)
     for run in record.evaluations:
         for lap in run.laps:
             _row(table, run.source.rsplit("/", 1)[-1], str(lap.trial), seconds(lap.time_ms),
                           percent(lap.completion_pct), lap.status, str(lap.off_track),
-                          str(lap.crashes))
+                          str(lap.crashes), str(lap.resets))
     return table
 
 

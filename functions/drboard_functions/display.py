@@ -5,6 +5,7 @@ from __future__ import annotations
 from datetime import UTC, datetime
 
 from .models.domain import Design, TimingMethod
+from .models.seasons import PointsTable, RoundView
 from .models.views import BoardView
 
 DASH = "—"
@@ -31,21 +32,30 @@ def percent(value: float) -> str:
     return f"{value:g} %"
 
 
-def algorithm_name(algorithm: str) -> str:
-    return _ALGORITHMS.get(algorithm, algorithm)
+def algorithm_name(algorithm: str | None) -> str:
+    return UNKNOWN if algorithm is None else _ALGORITHMS.get(algorithm, algorithm)
 
 
 PRIVATE_DESIGN = "private until the board closes"
+#: How a fact the run's files do not state reads.
+UNKNOWN = "unknown"
+UNKNOWN_DESIGN = "design unknown"
 
 
 def design_summary(design: Design | None, *, sensors: bool = False) -> str:
-    """``PPO, 14 actions, 2 m/s, ±30°`` (and the sensors, when asked)."""
+    """``PPO, 14 actions, 2 m/s, ±30°`` (and the sensors, when asked); what the run's files do
+    not state reads as unknown."""
     if design is None:
         return PRIVATE_DESIGN
-    space = f"{design.actions} actions" if design.actions else "continuous"
-    summary = (f"{algorithm_name(design.algorithm)}, {space}, {design.max_speed:g} m/s, "
-               f"±{design.max_steering:g}°")
-    listed = ", ".join(design.sensors)
+    if not design.known:
+        return UNKNOWN_DESIGN
+    if design.action_space is None or design.max_speed is None or design.max_steering is None:
+        summary = f"{algorithm_name(design.algorithm)}, action space unknown"
+    else:
+        space = f"{design.actions} actions" if design.actions else "continuous"
+        summary = (f"{algorithm_name(design.algorithm)}, {space}, {design.max_speed:g} m/s, "
+                   f"±{design.max_steering:g}°")
+    listed = ", ".join(design.sensors or [])
     return f"{summary}; {listed}" if sensors and listed else summary
 
 
@@ -71,3 +81,40 @@ def when(moment: datetime | None) -> str:
     moment = moment.astimezone(UTC)
     pattern = "%Y-%m-%d %H:%M UTC" if moment.second == 0 else "%Y-%m-%d %H:%M:%S UTC"
     return moment.strftime(pattern)
+
+
+# ---- seasons ---------------------------------------------------------------------------------
+
+
+def points_rule(points: PointsTable, best_of: int | None, rounds: list[RoundView]) -> str:
+    """The points table, what counts and the rounds' weights, in one line."""
+    if points.scheme == "percentile":
+        parts = [f"Points by place in each round's field: {points.percentile_max} to the winner, "
+                 "down to 1"]
+    else:
+        listed = "-".join(str(p) for p in points.positions)
+        parts = [f"Points {listed} for places 1 to {len(points.positions)}"]
+    if points.participation:
+        parts[0] += f", and {points.participation} for taking part"
+    if best_of is None:
+        parts.append("every round counts")
+    elif best_of < len(rounds):
+        parts.append(f"the best {best_of} of {len(rounds)} rounds count")
+    else:
+        parts.append(f"each racer's best {best_of} rounds count")
+    for r in rounds:
+        said = ([f"counts ×{r.weight:g}"] if r.weight != 1 else []) + (
+            ["always counts"] if r.always_counts else [])
+        if said:
+            parts.append(f"R{r.number} " + " and ".join(said))
+    return " · ".join(parts) + "."
+
+
+def ordinal(rank: int) -> str:
+    """``1`` -> ``1st``, ``12`` -> ``12th``, ``22`` -> ``22nd``."""
+    suffix = "th" if 10 <= rank % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(rank % 10, "th")
+    return f"{rank}{suffix}"
+
+
+def points_text(points: float) -> str:
+    return f"{points:g}"

@@ -95,6 +95,22 @@ class Banned(NotAuthorized):
     """An organiser banned the racer from the board (HTTP 403)."""
 
 
+class NotQualified(NotAuthorized):
+    """The board is a season's final and the racer is not one of its qualifiers (HTTP 403)."""
+
+
+class SeasonNotFound(DomainError):
+    """No such season (HTTP 404)."""
+
+
+class SeasonExists(DomainError):
+    """A season with this id already exists (HTTP 409)."""
+
+
+class SeasonLocked(DomainError):
+    """The season is closed (reopen it to change it), or was changed meanwhile (HTTP 409)."""
+
+
 class CopiedRun(DomainError):
     """The run's evaluation is already on the board under another racer (HTTP 409)."""
 

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from typing import Literal
 
-from drboard_assembler.catalog import default_catalog
-from drboard_assembler.record import TOP_SPEED_BOUND_MPS, EvaluationRun, Lap
+from drboard_assembler.record import EvaluationRun, Lap, Record, lap_floor_ms
 
-Flag = Literal["lap-timestamps", "reset-count", "params-name-another-file", "faster-than-top-speed"]
+Flag = Literal["lap-timestamps", "reset-count", "params-name-another-file", "faster-than-top-speed",
+               "design-unknown"]
 
 DESCRIPTIONS: dict[str, str] = {
     "lap-timestamps": "a lap's time disagrees with its start and end timestamps",
@@ -20,7 +20,10 @@ DESCRIPTIONS: dict[str, str] = {
                    "immobilisations and reversals",
     "params-name-another-file": "the run folder's evaluation parameters name a metrics file it "
                                 "does not hold",
-    "faster-than-top-speed": "a lap is faster than the track's length at the model's top speed",
+    "faster-than-top-speed": "a lap is faster than the track's shortest path at the model's top "
+                             "speed",
+    "design-unknown": "the run's files do not describe the model's action space: its top speed, "
+                      "and so its laps' pace, cannot be checked",
     # For the organiser, set by the board's copy and rule checks; they never move a run.
     "copied-run": "the same laps as another racer's run (the organiser decides whose it is)",
     "near-copy": "laps within a few milliseconds of another racer's run",
@@ -32,8 +35,17 @@ DESCRIPTIONS: dict[str, str] = {
 TIMESTAMP_TOLERANCE_MS = 50
 
 
-def run_flags(run: EvaluationRun, track: str, max_speed: float) -> list[Flag]:
-    """The flags of one evaluation run, in a fixed order."""
+def record_flags(record: Record, run: EvaluationRun) -> list[Flag]:
+    """The flags of one of a record's evaluation runs, in a fixed order."""
+    flags = run_flags(run, record.track, record.design.max_speed)
+    if record.design.action_space is None:
+        flags.append("design-unknown")
+    return flags
+
+
+def run_flags(run: EvaluationRun, track: str, max_speed: float | None) -> list[Flag]:
+    """The flags of one evaluation run, in a fixed order. A model whose top speed is unknown is
+    checked against the fastest any action space allows."""
     flags: list[Flag] = []
     if any(_timestamps_disagree(lap) for lap in run.laps):
         flags.append("lap-timestamps")
@@ -41,7 +53,7 @@ def run_flags(run: EvaluationRun, track: str, max_speed: float) -> list[Flag]:
         flags.append("reset-count")
     if run.named_by_params is False:
         flags.append("params-name-another-file")
-    fastest_ms = _fastest_ms(track, max_speed)
+    fastest_ms = lap_floor_ms(track, max_speed)
     if fastest_ms is not None and any(lap.complete and lap.time_ms < fastest_ms for lap in run.laps):
         flags.append("faster-than-top-speed")
     return flags
@@ -57,10 +69,3 @@ def _resets_disagree(lap: Lap) -> bool:
     if lap.immobilized is None or lap.reversed is None:
         return False  # an older metrics file: not every cause is counted
     return lap.resets != lap.crashes + lap.off_track + lap.immobilized + lap.reversed
-
-
-def _fastest_ms(track_id: str, max_speed: float) -> float | None:
-    track = default_catalog().get(track_id)
-    if track is None:
-        return None
-    return 1000 * track.length_m / min(max_speed, TOP_SPEED_BOUND_MPS)

@@ -7,9 +7,9 @@ from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
-from drboard_assembler.record import Record
+from drboard_assembler.record import Hyperparameters, Record
 
-from .display import algorithm_name
+from .display import DASH, UNKNOWN, algorithm_name
 from .models.views import DesignFacts, SharedFact
 
 #: The facts insights summarise, with how people read them (in this order).
@@ -36,18 +36,20 @@ CHOICES = {"algorithm", "action_space", "sensors", "neural_network", "loss_type"
 
 
 def design_facts(record: Record) -> DesignFacts:
+    """The design's facts; None for each the run's files do not state (insights leave those out,
+    and a comparison shows them as unknown)."""
     design, space = record.design, record.design.action_space
-    hyper = design.hyperparameters
-    speeds = ([a.speed for a in space.actions] if space.actions
-              else [space.speed.low] if space.speed else [])
+    hyper = design.hyperparameters or Hyperparameters()
+    speeds = [] if space is None else ([a.speed for a in space.actions] if space.actions
+                                       else [space.speed.low] if space.speed else [])
     return DesignFacts(
         algorithm=design.algorithm,
-        action_space=space.type,
-        actions=len(space.actions) if space.actions else None,
-        max_speed=space.max_speed,
+        action_space=space.type if space else None,
+        actions=len(space.actions) if space and space.actions else None,
+        max_speed=space.max_speed if space else None,
         min_speed=min(speeds) if speeds else None,
-        max_steering=space.max_steering,
-        sensors=sorted(design.sensors),
+        max_steering=space.max_steering if space else None,
+        sensors=sorted(design.sensors) if design.sensors is not None else None,
         neural_network=design.neural_network,
         discount_factor=hyper.discount_factor,
         learning_rate=hyper.lr,
@@ -58,7 +60,29 @@ def design_facts(record: Record) -> DesignFacts:
         loss_type=hyper.loss_type,
         training_time_s=record.training.training_time_s if record.training else None,
         training_episodes=record.training.episodes if record.training else None,
+        unknown=unknown_facts(record),
     )
+
+
+_SPACE_FACTS = ("action_space", "actions", "max_speed", "min_speed", "max_steering")
+_HYPER_FACTS = ("discount_factor", "learning_rate", "batch_size", "entropy", "epochs",
+                "episodes_between_training", "loss_type")
+
+
+def unknown_facts(record: Record) -> list[str]:
+    """The facts the run's files do not state, in LABELS order."""
+    design = record.design
+    unknown: set[str] = set()
+    if design.action_space is None:
+        unknown.update(_SPACE_FACTS)
+    if design.hyperparameters is None:
+        unknown.update(_HYPER_FACTS)
+    if record.training is None:
+        unknown.update(("training_time_s", "training_episodes"))
+    for name in ("algorithm", "sensors", "neural_network"):
+        if getattr(design, name) is None:
+            unknown.add(name)
+    return [name for name in LABELS if name in unknown]
 
 
 def differences(facts: Sequence[DesignFacts]) -> list[str]:
@@ -81,7 +105,7 @@ def algorithm_differences(facts: Sequence[DesignFacts], differing: Sequence[str]
     if len({f.algorithm for f in facts}) < 2:
         return []
     return [name for name in differing
-            if any(name in (fixed := FIXED_BY_ALGORITHM.get(f.algorithm, {}))
+            if any(name in (fixed := FIXED_BY_ALGORITHM.get(f.algorithm or "", {}))
                    and getattr(f, name) == fixed[name] for f in facts)]
 
 
@@ -110,10 +134,11 @@ def shared_facts(top: Sequence[DesignFacts], field: Sequence[DesignFacts]) -> li
     return shared
 
 
-def fact_text(name: str, value: Any) -> str:
-    """A fact's value as people read it."""
+def fact_text(name: str, value: Any, unknown: bool = False) -> str:
+    """A fact's value as people read it; one the run's files do not state, as unknown (a fact
+    that does not apply, such as a continuous action space's count of actions, as a dash)."""
     if value is None:
-        return "—"
+        return UNKNOWN if unknown else DASH
     if name == "algorithm":
         return algorithm_name(str(value))
     if isinstance(value, tuple | list):

@@ -12,7 +12,8 @@ from datetime import UTC, datetime
 
 from drboard_assembler.record import EvaluationRun, Record
 
-from .flags import run_flags
+from .conditions import meets
+from .flags import record_flags
 from .models.domain import BoardRules, Score, TimingMethod
 
 _TIME_DIGITS = 12
@@ -65,14 +66,15 @@ def score_run(run: EvaluationRun, rules: BoardRules, flags: list[str] | None = N
         best_lap_ms=run.best_lap_ms,
         run=run.source,
         flags=flags,
+        conditions=run.conditions,
     )
 
 
 def score_record(record: Record, rules: BoardRules) -> Score:
-    """The record's best evaluation run under the board's rules."""
-    speed = record.design.action_space.max_speed
-    return min((score_run(run, rules, list(run_flags(run, record.track, speed)))
-                for run in record.evaluations), key=score_key)
+    """The record's best evaluation run under the board's rules, of the runs evaluated under
+    the conditions the board requires (a push of none is refused before it is scored)."""
+    runs = [run for run in record.evaluations if meets(rules.conditions, run)] or record.evaluations
+    return min((score_run(run, rules, list(record_flags(record, run))) for run in runs), key=score_key)
 
 
 def score_key(score: Score) -> str:

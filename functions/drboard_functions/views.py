@@ -17,11 +17,11 @@ def design_of(record: Record) -> Design:
     space = record.design.action_space
     return Design(
         algorithm=record.design.algorithm,
-        action_space=space.type,
-        actions=len(space.actions) if space.actions else None,
-        max_speed=space.max_speed,
-        max_steering=space.max_steering,
-        sensors=list(record.design.sensors),
+        action_space=space.type if space else None,
+        actions=len(space.actions) if space and space.actions else None,
+        max_speed=space.max_speed if space else None,
+        max_steering=space.max_steering if space else None,
+        sensors=list(record.design.sensors) if record.design.sensors is not None else None,
     )
 
 
@@ -40,6 +40,7 @@ def board_view(stored: StoredBoard, now: datetime) -> BoardView:
         method=board.rules.method,
         min_laps=board.rules.min_laps,
         flagged_runs=board.rules.flagged_runs,
+        conditions=board.rules.conditions,
         designs=board.designs,
         status=board.status(now),
         opens_at=board.opens_at,
@@ -75,6 +76,7 @@ def entry_view(entry: Entry, rank: int, leader: Entry | None, *, design: bool = 
         submission_id=entry.submission_id,
         design=entry.design if design else None,
         flags=entry.score.flags,
+        conditions=entry.score.conditions,
     )
 
 

@@ -28,11 +28,13 @@ from urllib.parse import quote, urlencode
 
 from drboard_assembler.record import Record
 
-from .display import DASH, PRIVATE_DESIGN, duration, gap, method_label, percent, seconds, when
+from . import conditions as condition_texts
+from .display import DASH, PRIVATE_DESIGN, UNKNOWN, duration, gap, method_label, percent, seconds, when
 from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, algorithm_differences, design_facts, fact_text
 from .models.domain import BoardStatus, Design, TimingMethod
+from .models.seasons import SeasonLink
 from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
 if TYPE_CHECKING:  # both load with the first page that needs them (see the module's docstring)
@@ -67,14 +69,14 @@ class Assets:
 
     @property
     def style_hash(self) -> str:
-        return _csp_hash(self.style)
+        return csp_hash(self.style)
 
     @property
     def script_hash(self) -> str:
-        return _csp_hash(self.script)
+        return csp_hash(self.script)
 
 
-def _csp_hash(text: str) -> str:
+def csp_hash(text: str) -> str:
     return "sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode()
 
 
@@ -119,6 +121,10 @@ def board_path(board_id: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/view"
 
 
+def season_path(season_id: str) -> str:
+    return "/seasons/" + quote(season_id, safe="") + "/view"
+
+
 def racer_path(board_id: str, racer: str) -> str:
     return "/boards/" + quote(board_id, safe="") + "/racers/" + quote(racer, safe="") + "/view"
 
@@ -150,14 +156,16 @@ def index_page(boards: Iterable[BoardView]) -> str:
 
 def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: datetime,
                url: str = "", endpoint: str = "", qr_svg: str = "",
-               join_code: str | None = None) -> str:
-    """``/boards/{board}/view``: the board's status, window and rules, how to join and push,
-    and the standings with gaps to the leader and each model's design. ``screen`` is the
+               join_code: str | None = None, seasons: Sequence[SeasonLink] = ()) -> str:
+    """``/boards/{board}/view``: the board's status, window and rules, the seasons it counts
+    for (and whose final it is), how to join and push, and the standings with gaps to the
+    leader and each model's design. ``screen`` is the
     big-screen mode: sized for a room, one line a racer, the join code and a QR code
     (``qr_svg``, of ``url``), auto-scrolling."""
     board = page.board
     leader = page.entries[0].racer if page.entries and page.entries[0].rank == 1 else None
-    entries = [_entry(board.board_id, entry, leader) for entry in page.entries]
+    entries = [_entry(board.board_id, entry, leader, conditions=not screen and board.conditions is None)
+               for entry in page.entries]
     racers = "racer" if board.participants == 1 else "racers"
     next_path = None
     if page.next_cursor:
@@ -179,7 +187,9 @@ def board_page(page: BoardPage, etag: str = "", *, screen: bool = False, now: da
         next_path=next_path, insights_path=_insights_path(board.board_id),
         compare_top_path=(compare_path(board.board_id, [q.racer for q in qualified[:2]])
                           if len(qualified) >= 2 and not screen else None),
-        screen_path=board_path(board.board_id) + "?screen=1")
+        screen_path=board_path(board.board_id) + "?screen=1",
+        seasons=[{"path": season_path(link.season_id), "title": link.title, "final": link.final}
+                 for link in seasons])
 
 
 def waiting_page(board_id: str, screen: bool = False, *, join_code: str | None = None,
@@ -238,6 +248,9 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
                     strong=lap.complete) for lap in run.laps], "seconds")
     context["action_chart"] = _action_space_chart(record)
     context["design"] = [("model", record.model_name), *_design_rows(record)]
+    context["sources"] = _source_rows(record)
+    context["conditions"] = condition_texts.rows(entry.conditions)
+    context["penalties_note"] = condition_texts.PENALTIES_NOTE
     context["training"] = None
     context["training_chart"] = None
     if record.training:
@@ -282,7 +295,8 @@ def compare_page(comparison: Comparison, records: Sequence[Record | None] = ()) 
                                              comparison.differences))
     rows = {"choices": [], "by_algorithm": [], "same": []}  # type: dict[str, list[dict[str, Any]]]
     for fact, label in LABELS.items():
-        values = [fact_text(fact, getattr(c.facts, fact)) for c in comparison.racers]
+        values = [fact_text(fact, getattr(c.facts, fact), fact in c.facts.unknown)
+                  for c in comparison.racers]
         differs = fact in comparison.differences
         group = "by_algorithm" if fact in by_algorithm else "choices" if differs else "same"
         rows[group].append({"label": label, "cells": values, "differs": differs})
@@ -376,6 +390,9 @@ def rules_line(board: BoardView) -> str:
         parts.append(f"at most {board.max_submissions} submissions each")
     if board.flagged_runs == "unranked":
         parts.append("flagged runs do not rank")
+    if board.conditions is not None:
+        parts.append(f"evaluated with {condition_texts.summary(board.conditions)}")
+    parts.append("times include penalties")
     return f"{_race(board)} · " + " · ".join(parts)
 
 
@@ -415,7 +432,10 @@ def _live(board_id: str, etag: str, missing: bool = False) -> dict[str, Any]:
             "etag": etag, "missing": missing}
 
 
-def _entry(board_id: str, entry: EntryView, leader: str | None) -> dict[str, Any]:
+def _entry(board_id: str, entry: EntryView, leader: str | None, *,
+           conditions: bool = False) -> dict[str, Any]:
+    """One row of the standings; with ``conditions`` (a board that takes runs of any
+    conditions), what the entry's evaluation ran under."""
     css = (f"q{entry.rank}" if entry.rank <= 3 else "") if entry.qualified else "dnq"
     return {
         "css": css, "racer": entry.racer, "submission_id": entry.submission_id, "rank": entry.rank,
@@ -424,6 +444,7 @@ def _entry(board_id: str, entry: EntryView, leader: str | None) -> dict[str, Any
         "gap": gap(entry.gap_ms) if entry.qualified else DASH,
         "best_lap": seconds(entry.best_lap_ms), "laps": entry.laps_completed,
         "design": design_summary(entry.design),
+        "conditions": condition_texts.short(entry.conditions) if conditions else "",
         "compare_path": (compare_path(board_id, [leader, entry.racer])
                          if leader and leader != entry.racer and entry.design is not None else None),
     }
@@ -451,10 +472,14 @@ def _flag_text(flags: list[str]) -> str:
 
 
 def _design_rows(record: Record) -> list[tuple[str, str]]:
+    """Each design fact, unknown where the run's files do not state it."""
     facts = design_facts(record)
-    rows = [(label, fact_text(name, getattr(facts, name))) for name, label in LABELS.items()
-            if not name.startswith("training") and getattr(facts, name) is not None]
+    rows = [(label, fact_text(name, getattr(facts, name), name in facts.unknown))
+            for name, label in LABELS.items() if not name.startswith("training")
+            and (getattr(facts, name) is not None or name in facts.unknown)]
     hyper = record.design.hyperparameters
+    if hyper is None:
+        return rows
     shown = {"discount_factor", "lr", "batch_size", "beta_entropy", "num_epochs",
              "num_episodes_between_training", "loss_type"}
     rest = hyper.model_dump(exclude=shown | {"other"}, exclude_none=True) | hyper.other
@@ -462,10 +487,20 @@ def _design_rows(record: Record) -> list[tuple[str, str]]:
     return rows
 
 
-def _action_space_chart(record: Record) -> charts.Figure:
+def _source_rows(record: Record) -> list[tuple[str, str]]:
+    """The file each design fact was read from (none for a record from before they were kept)."""
+    sources = record.design.sources
+    if sources is None:
+        return []
+    return [(fact.replace("_", " "), name or UNKNOWN) for fact, name in sources.model_dump().items()]
+
+
+def _action_space_chart(record: Record) -> charts.Figure | None:
     from . import charts
 
     space = record.design.action_space
+    if space is None:
+        return None
     limit = max(space.max_steering, 1.0)
     if space.actions:
         return charts.points(

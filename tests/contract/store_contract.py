@@ -41,6 +41,7 @@ from drboard_functions.stores.base import (
     LimitReached,
 )
 
+from tests.contract.season_contract import SeasonStoreContract
 from tests.recordkit import LapSpec, copy_of, make_record
 
 T0 = datetime(2025, 3, 1, 12, 0, tzinfo=UTC)
@@ -119,8 +120,9 @@ def ranks_by_listing(store: BoardStore, board_id: str = TRACK) -> dict[str, int]
     return {e.racer: 1 + sum(other.score_key < e.score_key for other in entries) for e in entries}
 
 
-class StoreContract:
-    """Behaviour every BoardStore adapter shares. Subclasses supply the ``store`` fixture."""
+class StoreContract(SeasonStoreContract):
+    """Behaviour every BoardStore adapter shares (seasons' in ``season_contract.py``).
+    Subclasses supply the ``store`` fixture."""
 
     @pytest.fixture
     def store(self) -> BoardStore:

@@ -24,12 +24,14 @@ class EventStream:
         self.response = self.connection.getresponse()
 
     def next_event(self) -> tuple[str, str]:
+        """The next event about the board (the stream's keep-alive pings are passed over)."""
         fields: dict[str, str] = {}
         while True:
             line = self.response.readline().decode().rstrip("\n")
             if not line:
-                if "event" in fields:
+                if fields.get("event", "ping") != "ping":
                     return fields["event"], fields.get("data", "")
+                fields = {}
                 continue
             if line.startswith(":"):
                 continue

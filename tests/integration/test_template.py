@@ -99,7 +99,7 @@ def test_exactly_the_routes_the_code_signs_require_iam_authorisation(
     signed = {route for kind in FUNCTIONS.values() for route, operation in _app_operations(kind).items()
               if operation.get("security") == [{"sigv4": []}]}
     assert ("POST", "/boards/{board}/submissions") in signed
-    assert len(signed) == 25, "the push, /me, /me/alias and the twenty-two organiser routes"
+    assert len(signed) == 33, "the push, /me, /me/alias, 22 organiser routes, 8 of seasons"
     (api,) = [r for r in cloudformation["Resources"].values() if r["Type"] == "AWS::ApiGatewayV2::Api"]
     paths = api["Properties"]["Body"]["paths"]
     seen = set()
@@ -267,6 +267,15 @@ def _granted(cloudformation: dict[str, Any], function: str) -> set[tuple[str, st
     return granted
 
 
+def pull_writes(cloudformation: dict[str, Any]) -> list[Any]:
+    """The conditions of the pull function's statements that grant a write."""
+    role = cloudformation["Resources"]["PullFunctionRole"]["Properties"]
+    return [statement.get("Condition") for policy in role.get("Policies", [])
+            for statement in policy["PolicyDocument"]["Statement"]
+            if any(a.startswith("dynamodb:Put") for a in ([statement["Action"]] if isinstance(
+                statement["Action"], str) else statement["Action"]))]
+
+
 def _resource_kind(resource: Any) -> str:
     text = json.dumps(resource)
     if "/index/" in text:
@@ -367,8 +376,10 @@ def test_pull_works_with_its_template_environment_and_permissions(
     used = set(aws.calls)
     assert used, "the pull function reads the table"
     assert used <= granted, f"calls not allowed by the template: {used - granted}"
-    assert not any(action.startswith(("s3:", "dynamodb:Put", "dynamodb:Update"))
+    assert not any(action.startswith(("s3:", "dynamodb:Update", "dynamodb:Delete"))
                    for action, _ in granted), "the pull function only reads"
+    assert pull_writes(cloudformation) == [{"ForAllValues:StringLike": {
+        "dynamodb:LeadingKeys": ["#RESULTS#*"]}}], "but for the results a season keeps"
 
 
 def test_admin_works_with_its_template_environment_and_permissions(

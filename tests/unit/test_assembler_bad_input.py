@@ -87,10 +87,16 @@ def test_missing_evaluation_metrics(tmp_path: Path) -> None:
     assert message.startswith("evaluation: there is no evaluation in it")
 
 
-def test_missing_model_metadata(tmp_path: Path) -> None:
+def test_missing_model_metadata_leaves_the_action_space_unknown(tmp_path: Path) -> None:
     run = copy_example(tmp_path)
     (run / "model_metadata.json").unlink()
-    assert assembly_error(run).startswith("model_metadata.json: not found")
+    record = assemble(run)
+    design = record.design
+    assert (design.action_space, design.algorithm, design.sensors, design.metadata_version) == (
+        None, None, None, None)
+    assert design.sources is not None and design.sources.action_space is None
+    assert design.hyperparameters is not None  # ip/hyperparameters.json is still there
+    assert design.sources.hyperparameters == "ip/hyperparameters.json"
 
 
 # ------------------------------------------------------------------ wrong types and values

@@ -56,9 +56,12 @@ def test_console_folder_uses_the_evaluation_whose_metrics_are_present(console_ru
     assert 0 < record.training.episodes <= 245
     assert len(record.training.curve) <= 200
 
-    roles = sorted(source.role for source in record.provenance)
-    assert roles.count("evaluation_params") == 2
-    assert roles.count("training_params") == 1
+    roles = {source.path: source.role for source in record.provenance}
+    # only the Belille evaluation's parameters describe the run; the league race's name a
+    # metrics file the folder does not hold
+    assert [path for path, role in roles.items() if role == "evaluation_params"] == [
+        "eval_params_ce4c7dca-7fb5-4e3f-814d-0fd06840d94d.yaml"]
+    assert list(roles.values()).count("training_params") == 1
 
 
 def test_console_record_round_trips(console_run: Path) -> None:

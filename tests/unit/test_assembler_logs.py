@@ -49,8 +49,8 @@ def test_a_log_only_console_download_assembles_with_no_flag(tmp_path: Path) -> N
 
 def test_a_record_built_from_logs_says_so_in_its_provenance(tmp_path: Path) -> None:
     record = assemble(logkit.console_log_download(tmp_path / "pitstop-logs"))
-    roles = {source.role for source in record.provenance}
-    assert roles == {"simulation_log"}
+    roles = {source.path.rsplit("-", 1)[-1]: source.role for source in record.provenance}
+    assert roles == {"robomaker.log": "simulation_log", "sagemaker.log": "training_log"}
     assert record.evaluations[0].source.endswith("-robomaker.log")
 
 
@@ -193,8 +193,13 @@ def test_different_model_metadata_files_are_refused_by_name(tmp_path: Path) -> N
         params.write_text("".join(line for line in params.read_text().splitlines(keepends=True)
                                   if not line.startswith("MODEL_METADATA_FILE_S3_KEY")))
     message = message_of(run)
-    assert "model_metadata.json: the folder holds different ones" in message
-    assert "other-model/model_metadata.json" in message
+    assert ("model_metadata.json: holds the metadata of 2 models (model_metadata.json, "
+            "other-model/model_metadata.json) and nothing in the evaluation's files names the one "
+            "it ran: name it (--model other-model)") in message
+    assert f"drboard push {run}/other-model" in message
+    named = assemble(run, Overrides(model="other-model"))
+    assert named.model_name == "other-model"
+    assert named.design.action_space is not None and len(named.design.action_space.actions or []) == 2
 
 
 def test_the_model_metadata_the_params_name_is_used(tmp_path: Path) -> None:

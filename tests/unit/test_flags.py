@@ -33,8 +33,8 @@ def with_laps(record: Record, *laps: dict[str, Any], named_by_params: bool | Non
 
 def record_flags(record: Record) -> dict[str, list[Flag]]:
     """Each flagged evaluation run's flags, by its source."""
-    speed = record.design.action_space.max_speed
-    flagged = {run.source: run_flags(run, record.track, speed) for run in record.evaluations}
+    flagged = {run.source: run_flags(run, record.track, record.design.max_speed)
+               for run in record.evaluations}
     return {source: flags for source, flags in flagged.items() if flags}
 
 
@@ -52,7 +52,8 @@ def test_a_clean_run_has_no_flags() -> None:
     ({"ended_ms": 4000.0}, None, "lap-timestamps"),
     ({"resets": 2, "crashes": 1}, None, "reset-count"),
     ({}, False, "params-name-another-file"),
-    ({"time_ms": 6000, "ended_ms": 7000.0}, None, "faster-than-top-speed"),
+    # the shortest lap of the Smile Speedway (17.96 m) takes 5.99 s at the model's 3 m/s
+    ({"time_ms": 5500, "ended_ms": 6500.0}, None, "faster-than-top-speed"),
 ])
 def test_each_check_flags_the_run_and_the_board_shows_it(
         service: LeaderboardService, lap: dict[str, Any], named_by_params: bool | None,
@@ -113,3 +114,56 @@ def test_parameters_naming_a_metrics_file_the_folder_lacks_flag_its_runs(tmp_pat
     params.write_text(text.replace("bbnoUuwuIo4bkAE.json", "SomeoneElsesRun.json"))
     flagged = record_flags(assemble(run))
     assert flagged and all(flags == ["params-name-another-file"] for flags in flagged.values())
+
+
+def test_a_lap_cutting_corners_at_the_top_speed_is_not_flagged() -> None:
+    """Faster than the centre line allows (6.2 s at 3 m/s on the Smile Speedway), as a real car
+    cutting corners is, but not faster than the track's shortest path: no flag."""
+    record = with_laps(make_record("Ada"), {"time_ms": 6200, "ended_ms": 7200.0})
+    assert record_flags(record) == {}
+
+
+def test_the_drfc_fastcar_lap_of_38_043_s_is_not_flagged_and_a_lap_under_the_floor_is(
+        tmp_path: Path) -> None:
+    from tests.downloadkit import drfc_folder
+
+    genuine = assemble(drfc_folder(tmp_path / "genuine", 38043))
+    assert record_flags(genuine) == {}
+    too_fast = assemble(drfc_folder(tmp_path / "too-fast", 32000))  # Spain's floor: 32.8 s at 1.5 m/s
+    assert list(record_flags(too_fast).values()) == [["faster-than-top-speed"]]
+
+
+def test_laps_read_from_a_log_carry_their_resets_and_are_not_flagged(tmp_path: Path) -> None:
+    """A head-to-bot race read from its log: the off-tracks and crashes it shows are its resets."""
+    from tests import layoutkit as kit
+    from tests.downloadkit import droa_params
+
+    evaluation = kit.Evaluation((kit.LapSpec(29.0, off_tracks=1, crashes=1), kit.LapSpec(28.5, crashes=2)))
+    kit.write(tmp_path / "h2b" / "logs" / "evaluation" / "race-simulation.log",
+              kit.evaluation_log(droa_params(RACE_TYPE="HEAD_TO_BOT", NUMBER_OF_BOT_CARS=3), evaluation,
+                                 prefix=kit.DROA_PREFIX))
+    record = assemble(tmp_path / "h2b")
+    assert [(lap.off_track, lap.crashes, lap.resets) for lap in record.evaluations[0].laps] == [
+        (1, 1, 2), (0, 2, 2)]
+    assert record_flags(record) == {}
+
+
+def test_a_record_without_an_action_space_is_flagged_design_unknown(service: LeaderboardService) -> None:
+    fields = make_record("Ada").model_dump(exclude={"submission_id"})
+    fields["design"] = {"algorithm": None, "action_space": None, "sensors": None,
+                        "hyperparameters": None}
+    record = Record.build(**fields)
+    receipt = service.push(record)
+    assert receipt.entry.flags == ["design-unknown"]
+    assert receipt.entry.qualified, "a default board ranks it"
+    assert receipt.entry.design is not None and not receipt.entry.design.known
+
+
+def test_a_board_whose_flagged_runs_do_not_rank_keeps_an_unknown_design_unranked(
+        service: LeaderboardService) -> None:
+    service.create_board(BoardSpec(board_id="cup", title="Cup", track="reInvent2019",
+                                   flagged_runs="unranked"))
+    fields = make_record("Ada").model_dump(exclude={"submission_id"})
+    fields["design"] = {}
+    receipt = service.push(Record.build(**fields), "cup")
+    assert (receipt.entry.qualified, receipt.entry.flags) == (False, ["design-unknown"])

@@ -23,6 +23,7 @@ NOWHERE = ("aws_xray_sdk",)
 #: Besides NOWHERE, what each handler's import must leave alone.
 NOT_IMPORTED = {
     "pull": ("drboard_functions.routes.submissions", "drboard_functions.routes.organisers",
+             "drboard_functions.routes.season_changes",
              "drboard_functions.routes.webhooks", "drboard_functions.service.pushing",
              "drboard_functions.service.transfer", "drboard_functions.service.managing",
              "drboard_functions.service.moderating", "drboard_functions.service.aliases",
@@ -37,6 +38,7 @@ NOT_IMPORTED = {
              "drboard_functions.models.transfer",
              "drboard_functions.notify", "jinja2"),
     "admin": ("drboard_functions.routes.boards", "drboard_functions.routes.pages",
+              "drboard_functions.routes.seasons", "drboard_functions.season_page",
               "drboard_functions.routes.results", "drboard_functions.routes.submissions",
               "drboard_functions.web", "jinja2"),
 }

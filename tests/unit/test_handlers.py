@@ -33,12 +33,16 @@ from tests.awskit import REGION
 
 EVENTS = Path(__file__).parents[2] / "events"
 PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_racer.json",
-               "pull_view.json", "pull_racer_status.json", "pull_racer_history.json"]
+               "pull_view.json", "pull_racer_status.json", "pull_racer_history.json",
+               "pull_seasons.json"]
 ADMIN_EVENTS = ["admin_create_board.json", "admin_update_board.json", "admin_close_board.json",
                 "admin_delete_board.json", "admin_restore_board.json", "admin_import_board.json",
                 "admin_import_submission.json", "admin_export_board.json", "admin_remove_entry.json",
                 "admin_ban_racer.json", "admin_unban_racer.json", "admin_audit.json",
-                "admin_rebuild_ranks.json"]
+                "admin_rebuild_ranks.json", "admin_create_season.json", "admin_add_round.json",
+                "admin_set_final.json", "admin_close_season.json"]
+#: A season's reads: answered once the season exists (tests/integration/test_template_seasons.py).
+SEASON_EVENTS = ["season_standings.json", "season_view.json"]
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 
@@ -73,11 +77,12 @@ def test_the_events_are_api_gateway_http_api_v2_events() -> None:
         for name, value in (event.get("pathParameters") or {}).items():
             assert "{" + name + "}" in route and value in event["rawPath"]
     assert "iam" in load("push.json")["requestContext"]["authorizer"]
-    assert set(ADMIN_EVENTS) | set(PULL_EVENTS) | {"push.json"} == {p.name for p in EVENTS.glob("*.json")}
+    assert set(ADMIN_EVENTS) | set(PULL_EVENTS) | set(SEASON_EVENTS) | {"push.json"} == {
+        p.name for p in EVENTS.glob("*.json")}
     for name in ADMIN_EVENTS:  # organiser requests are signed, and API Gateway says by whom
         assert load(name)["requestContext"]["authorizer"]["iam"]["userArn"], name
         assert load(name)["headers"]["authorization"].startswith("AWS4-HMAC-SHA256 "), name
-    for name in PULL_EVENTS:
+    for name in PULL_EVENTS + SEASON_EVENTS:
         assert "authorizer" not in load(name)["requestContext"], name
     imported = json.loads(load("admin_import_submission.json")["body"])["record"]
     assert Record.model_validate(imported) == event_record(), "the same run as push.json's"

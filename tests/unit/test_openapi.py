@@ -68,6 +68,18 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
         ("GET", "/me"),
         ("PUT", "/me/alias"),
         ("GET", "/.well-known/drboard.json"),
+        ("GET", "/seasons"),
+        ("GET", "/seasons/{season}"),
+        ("GET", "/seasons/view"),
+        ("GET", "/seasons/{season}/view"),
+        ("POST", "/seasons"),
+        ("PATCH", "/seasons/{season}"),
+        ("PUT", "/seasons/{season}/rounds/{board}"),
+        ("DELETE", "/seasons/{season}/rounds/{board}"),
+        ("PUT", "/seasons/{season}/final"),
+        ("DELETE", "/seasons/{season}/final"),
+        ("POST", "/seasons/{season}/close"),
+        ("POST", "/seasons/{season}/reopen"),
         ("GET", "/boards/{board}/laps.csv"),
         ("GET", "/boards/{board}/racers/{racer}/laps.json"),
         ("GET", "/racers/{racer}/submissions.csv"),
@@ -81,7 +93,7 @@ def test_it_has_every_route_of_the_template(document: dict[str, Any]) -> None:
 def test_every_organiser_route_is_signed_and_lists_its_refusals(document: dict[str, Any]) -> None:
     admin = [(method, path, operation) for path, item in document["paths"].items()
              for method, operation in item.items() if "admin" in operation["tags"]]
-    assert len(admin) == 22
+    assert len(admin) == 30, "22 for boards and aliases, 8 for seasons"
     for method, path, operation in admin:
         assert operation["security"] == [{"sigv4": []}], (method, path)
         assert {"400", "403"} <= set(operation["responses"]), (method, path)
@@ -131,5 +143,5 @@ def test_reads_list_400_not_powertools_default_422(document: dict[str, Any]) -> 
 
 
 def test_pages_are_html(document: dict[str, Any]) -> None:
-    for path in ("/", "/boards/{board}/view"):
+    for path in ("/", "/boards/{board}/view", "/seasons/{season}/view", "/seasons/view"):
         assert "text/html" in document["paths"][path]["get"]["responses"]["200"]["content"]

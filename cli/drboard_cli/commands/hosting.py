@@ -48,7 +48,8 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
     (`drboard join CODE --endpoint URL`, also on the big screen). The code stays the same for
     the night, across restarts, until you rotate it (`drboard joins rotate`, or --new-code).
     Racers then push as the alias their first push claims. The organiser commands (`drboard
-    board ...`, `audit`, `export`, `import`, `joins`) are answered only on this machine itself.
+    board ...`, `season ...`, `audit`, `export`, `import`, `joins`) are answered only on this
+    machine itself.
     The log says who pushed which model, its time and rank, and every refusal. Ctrl-C stops it;
     every push that was answered is saved.
     """

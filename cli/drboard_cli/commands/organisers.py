@@ -56,6 +56,13 @@ def _setting_options(update: bool) -> Callable[[Callable[..., Any]], Callable[..
         click.option("--designs", type=click.Choice(["public", "after-close"]),
                      help="Whether everyone sees how the entries' models were built now, or only "
                           "once the board closes" + ("." if update else " (default: public).")),
+        click.option("--require", multiple=True, type=board_options.Requirement(clearable=update),
+                     metavar="CONDITION=VALUE",
+                     help="An evaluation condition runs must have been evaluated under, as their "
+                          "evaluation parameters state it; repeat for each: off-track-penalty=5, "
+                          "collision-penalty=5, resets=N, trials=3, continuous=yes|no, obstacles=N, "
+                          "bots=N (default: any)."
+                          + (" The ones given replace the board's; `none` clears them." if update else "")),
     ]
 
     def decorate(command: Callable[..., Any]) -> Callable[..., Any]:
@@ -94,7 +101,8 @@ def board_create(ctx: Context, /, board_id: str, **options: Any) -> None:
 def board_update(ctx: Context, /, board_id: str, **options: Any) -> None:
     """Change a named board's settings: only the options given change.
 
-    The timing method and minimum laps change only while the board has no entries.
+    The timing method, minimum laps, flagged-run rule and required conditions change only while
+    the board has no entries.
     """
     from .. import render
 

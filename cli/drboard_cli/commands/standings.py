@@ -54,9 +54,43 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
          output: Path | None) -> None:
     """Show a board's standings: rank, time, gap to the leader and each model's design."""
     with edge():
-        page = _collect(ctx.board, _board_id(track, board), top)
+        board_id = _board_id(track, board)
+        if board:
+            page = _collect(ctx.board, board_id, top)
+        else:
+            page = _track_page(ctx.board, track or "", board_id, top)
         _emit(page, fmt, output)
     finish()
+
+
+def _track_page(client: BoardClient, track: str, board_id: str, top: int) -> Any:
+    """The standings of a track's default board; when it has none, the refusal lists the
+    boards the track has (its object-avoidance or head-to-head boards, named boards)."""
+    from drboard_functions.errors import BoardNotFound
+
+    try:
+        return _collect(client, board_id, top)
+    except BoardNotFound:
+        others = _boards_of_track(client, track)
+        if not others:
+            raise
+        from ..render import plural
+
+        listing = ", ".join(f"{b.board_id} ({b.title}, {plural(b.participants, 'racer')})"
+                            for b in others[:10])
+        more = f" and {len(others) - 10} more" if len(others) > 10 else ""
+        raise BoardNotFound(f"no board {board_id!r}: no run was pushed to the track's default "
+                            f"board; its boards are {listing}{more} (use --board ID)") from None
+
+
+def _boards_of_track(client: BoardClient, track: str) -> list[Any]:
+    from drboard_assembler.catalog import UnknownTrackError, default_catalog
+
+    try:
+        track_id = default_catalog().resolve(track).track_id
+    except UnknownTrackError:
+        track_id = track.strip()
+    return sorted((b for b in client.boards() if b.track == track_id), key=lambda b: b.board_id)
 
 
 def _collect(client: BoardClient, board_id: str, top: int) -> Any:

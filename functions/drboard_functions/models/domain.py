@@ -5,7 +5,7 @@ from datetime import UTC, datetime
 from enum import StrEnum
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, TypeVar
 
-from drboard_assembler.record import RaceType
+from drboard_assembler.record import Conditions, RaceType
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
 if TYPE_CHECKING:
@@ -81,6 +81,23 @@ class Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
 
+class BoardConditions(Model):
+    """The evaluation conditions a board requires of a run: each one given must be what the
+    run's evaluation parameters state (community boards pin them, as the league did, because
+    runs evaluated under other rules are not comparable)."""
+
+    off_track_penalty_s: Annotated[float, Field(ge=0, le=3600)] | None = None
+    collision_penalty_s: Annotated[float, Field(ge=0, le=3600)] | None = None
+    max_resets: Annotated[int, Field(ge=0, le=1_000_000)] | None = None
+    trials: Annotated[int, Field(ge=1, le=100_000)] | None = None
+    continuous: bool | None = None
+    obstacles: Annotated[int, Field(ge=0, le=1000)] | None = None
+    bots: Annotated[int, Field(ge=0, le=1000)] | None = None
+
+    def required(self) -> dict[str, Any]:
+        return self.model_dump(exclude_none=True)
+
+
 class BoardRules(Model):
     """How a board times its racers. ``min_laps`` defaults to the method's own (1, 3, 3)."""
 
@@ -89,6 +106,8 @@ class BoardRules(Model):
     #: Whether a run the board's consistency checks flag still ranks, or only shows below the
     #: qualified racers.
     flagged_runs: FlaggedRuns = "rank"
+    #: The evaluation conditions a run must have been evaluated under (None: any).
+    conditions: BoardConditions | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -230,17 +249,23 @@ class Score(Model):
     best_lap_ms: int | None
     run: str  # the evaluation run that scored
     flags: list[str] = []  # the scoring run's consistency flags (see flags.py)
+    conditions: Conditions | None = None  # what the scoring run's evaluation ran under
 
 
 class Design(Model):
-    """The short form of a model's design, shown beside each entry."""
+    """The short form of a model's design, shown beside each entry; None where the run's files
+    do not state a fact (entries stored before facts could be unknown hold them all)."""
 
-    algorithm: str
-    action_space: Literal["discrete", "continuous"]
-    actions: int | None
-    max_speed: float
-    max_steering: float
-    sensors: list[str]
+    algorithm: str | None = None
+    action_space: Literal["discrete", "continuous"] | None = None
+    actions: int | None = None
+    max_speed: float | None = None
+    max_steering: float | None = None
+    sensors: list[str] | None = None
+
+    @property
+    def known(self) -> bool:
+        return self.algorithm is not None or self.action_space is not None
 
 
 class Entry(Model):

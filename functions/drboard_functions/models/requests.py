@@ -7,6 +7,7 @@ from drboard_assembler.record import RaceType, Record
 from pydantic import Field, StringConstraints
 
 from .domain import (
+    BoardConditions,
     BoardId,
     CooldownSeconds,
     Description,
@@ -47,6 +48,9 @@ class BoardSpec(Model):
     method: TimingMethod = TimingMethod.BEST_LAP_TIME
     min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
     flagged_runs: FlaggedRuns = "rank"
+    conditions: Annotated[BoardConditions | None, Field(
+        description="The evaluation conditions a run must have been evaluated under (its "
+                    "evaluation parameters must state each one given); null: any.")] = None
     designs: Designs = "public"
     opens_at: Moment | None = None
     closes_at: Moment | None = None
@@ -55,14 +59,16 @@ class BoardSpec(Model):
 
 
 class BoardChanges(Model):
-    """An update of a named board: only the fields given change; ``null`` clears a time or a
-    limit. The track, method and minimum laps change only while the board has no entries."""
+    """An update of a named board: only the fields given change; ``null`` clears a time, a
+    limit or the required conditions. The track, method, minimum laps, flagged-run rule and
+    required conditions change only while the board has no entries."""
 
     title: Title | None = None
     description: Description | None = None
     method: TimingMethod | None = None
     min_laps: Annotated[int, Field(ge=1, le=100)] | None = None
     flagged_runs: FlaggedRuns | None = None
+    conditions: BoardConditions | None = None
     designs: Designs | None = None
     opens_at: Moment | None = None
     closes_at: Moment | None = None

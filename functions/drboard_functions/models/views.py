@@ -4,10 +4,19 @@ are the stable JSON the README documents."""
 from datetime import datetime
 from typing import Literal
 
-from drboard_assembler.record import EvaluationRun, RaceType, Record
+from drboard_assembler.record import Conditions, EvaluationRun, RaceType, Record
 from pydantic import Field
 
-from .domain import AuditEvent, BoardStatus, Design, Designs, FlaggedRuns, Model, TimingMethod
+from .domain import (
+    AuditEvent,
+    BoardConditions,
+    BoardStatus,
+    Design,
+    Designs,
+    FlaggedRuns,
+    Model,
+    TimingMethod,
+)
 
 
 class AuditPage(Model):
@@ -86,6 +95,8 @@ class EntryView(Model):
     submission_id: str
     design: Design | None = Field(description="None while the board keeps designs private.")
     flags: list[str] = []
+    conditions: Conditions | None = Field(None, description="The conditions the counted run's "
+                                          "evaluation ran under, as its parameters state them.")
 
 
 class BoardView(Model):
@@ -100,6 +111,8 @@ class BoardView(Model):
     method: TimingMethod
     min_laps: int
     flagged_runs: FlaggedRuns = "rank"
+    conditions: BoardConditions | None = Field(None, description="The evaluation conditions the "
+                                               "board requires (null: any).")
     designs: Designs = "public"
     status: BoardStatus
     opens_at: datetime | None
@@ -203,13 +216,13 @@ class BoardList(Model):
 class DesignFacts(Model):
     """What a model's design comes down to, one comparable value per fact (None: not known)."""
 
-    algorithm: str
-    action_space: Literal["discrete", "continuous"]
+    algorithm: str | None
+    action_space: Literal["discrete", "continuous"] | None
     actions: int | None
-    max_speed: float
+    max_speed: float | None
     min_speed: float | None
-    max_steering: float
-    sensors: list[str]
+    max_steering: float | None
+    sensors: list[str] | None
     neural_network: str | None
     discount_factor: float | None
     learning_rate: float | None
@@ -220,6 +233,8 @@ class DesignFacts(Model):
     loss_type: str | None
     training_time_s: float | None
     training_episodes: int | None
+    #: The facts the run's files do not state (the others that are None do not apply).
+    unknown: list[str] = []
 
 
 class ComparedRacer(Model):

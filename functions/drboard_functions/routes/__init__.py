@@ -8,6 +8,8 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   ``admin_router`` (:mod:`.organisers`): the organisers' routes (create, change, close, delete,
   restore, export and import boards, moderation, audit), every one IAM-signed in the cloud and
   answered by ``drboard serve`` only to the computer it runs on.
+- :mod:`.seasons`: the seasons' reads and pages (pull); :mod:`.season_changes`: the organisers'
+  changes to seasons (admin).
 - :mod:`.params` holds what the routes share: the routers, the request parameters, who is
   calling, and each JSON body's bound; :mod:`.responses` what they answer.
 - The routes never build a service: the caller puts one in the resolver's context before each
@@ -80,8 +82,8 @@ __all__ = [
 ]
 
 #: The modules whose routes each router holds: taking a router from this package imports them.
-ROUTE_MODULES = {"push_router": ("submissions",), "pull_router": ("boards", "pages", "results"),
-                 "admin_router": ("organisers", "webhooks")}
+ROUTE_MODULES = {"push_router": ("submissions",), "pull_router": ("boards", "pages", "results", "seasons"),
+                 "admin_router": ("organisers", "season_changes", "webhooks")}
 #: The module each other name of the package comes from.
 _HOMES = {"COGNITO_PREFIX": "app", "ERROR_STATUS": "app", "BoardResolver": "app", "build_app": "app",
           "canonical_event": "app", "error_body": "app", "error_headers": "app", "refusal": "app",

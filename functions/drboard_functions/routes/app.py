@@ -54,8 +54,12 @@ from ..errors import (
     InvalidQuery,
     InvalidSubmission,
     NotAuthorized,
+    NotQualified,
     NotSignedIn,
     RacerNotFound,
+    SeasonExists,
+    SeasonLocked,
+    SeasonNotFound,
     StoreBusy,
     StoreError,
     StoreFailed,
@@ -109,6 +113,7 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (SubmissionTooLarge, HTTPStatus.REQUEST_ENTITY_TOO_LARGE),
     (BoardNotFound, HTTPStatus.NOT_FOUND),
     (RacerNotFound, HTTPStatus.NOT_FOUND),
+    (SeasonNotFound, HTTPStatus.NOT_FOUND),
     (WebhookNotFound, HTTPStatus.NOT_FOUND),
     (InvalidQuery, HTTPStatus.BAD_REQUEST),
     (UnreadableBody, HTTPStatus.BAD_REQUEST),
@@ -120,10 +125,13 @@ ERROR_STATUS: tuple[tuple[type[DomainError], HTTPStatus], ...] = (
     (NotSignedIn, HTTPStatus.UNAUTHORIZED),
     (AliasTaken, HTTPStatus.FORBIDDEN),
     (Banned, HTTPStatus.FORBIDDEN),
+    (NotQualified, HTTPStatus.FORBIDDEN),
     (NotAuthorized, HTTPStatus.FORBIDDEN),
     (CopiedRun, HTTPStatus.CONFLICT),
     (BoardExists, HTTPStatus.CONFLICT),
     (BoardLocked, HTTPStatus.CONFLICT),
+    (SeasonExists, HTTPStatus.CONFLICT),
+    (SeasonLocked, HTTPStatus.CONFLICT),
     (StoreFailed, HTTPStatus.BAD_GATEWAY),
     (StoreBusy, HTTPStatus.SERVICE_UNAVAILABLE),
     (StoreUnavailable, HTTPStatus.SERVICE_UNAVAILABLE),
@@ -318,7 +326,7 @@ def build_app(*routers: Router) -> BoardResolver:
         description="Push a model's evaluation as a record; read the standings, each racer's "
                     "history and how the fast models were built. Reads are public; submissions "
                     "and the organisers' routes (tag `admin`) are signed with SigV4 (IAM).",
-        tags=["submissions", "boards", "racers", ADMIN_TAG, "pages"],
+        tags=["submissions", "boards", "racers", "seasons", ADMIN_TAG, "pages"],
         # Plain data, which Powertools validates as an APIKey when it builds the document: its
         # OpenAPI models cost a cold start ~40 ms to import, for a document the functions never
         # serve. (No servers: Powertools' default is the same single "/".)

@@ -70,7 +70,7 @@ def board_view(board: BoardId, service: Service, request: Request, limit: Limit 
     url = invite.join_url if invite.code else invite.endpoint + web.board_path(board_id)
     html = web.board_page(page, etag, screen=screen, now=service.clock(), url=url,
                           endpoint=invite.endpoint, qr_svg=web.qr_svg(url) if screen else "",
-                          join_code=invite.code)
+                          join_code=invite.code, seasons=service.board_seasons(board_id))
     return page_answer(html, headers=page_policy(live=True) | etag_headers(etag))
 
 

@@ -57,6 +57,8 @@ admin_router = Router()
 BoardId = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
                               description="The board's id: a track's default board is its id, "
                                           "`<track>_cw` for clockwise runs.")]
+SeasonId = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
+                               description="The season's id.")]
 RacerAlias = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
                                  description="The racer's alias (any case).")]
 Limit = Annotated[int, Query(ge=1, le=MAX_PAGE, description="How many entries (1..500).")]

@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import hashlib
 from http import HTTPStatus
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from aws_lambda_powertools.event_handler import Response, content_types
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import __version__ as assembler_version
 from pydantic import BaseModel, ConfigDict, Field
+
+if TYPE_CHECKING:
+    from .params import RequestBody
 
 HTML = "text/html; charset=utf-8"
 #: Every page's headers; its Content-Security-Policy comes from :func:`page_answer` (the pages
@@ -70,6 +73,24 @@ UNREADABLE = (" Or a body that cannot be read as its headers say (`UnreadableBod
 UNSIGNED = ("Not signed with SigV4 by an identity allowed to invoke the route (API Gateway's own "
             "answer, without an `error` name); on `drboard serve`, a request from another "
             "computer than the one serving (`NotAuthorized`).")
+
+
+def admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
+                     body: RequestBody | None = None,
+                     errors: dict[int, str] | None = None,
+                     also: dict[int, OpenAPIResponse] | None = None) -> dict[int, OpenAPIResponse]:
+    """An organiser route's answers: its own, the refusal of unsigned requests, a body's (413,
+    415, 422), then its own errors and other answers (which replace the general ones)."""
+    responses: dict[int, OpenAPIResponse] = {ok_status: ok, 400: error_response(BAD_PATH),
+                                             403: error_response(UNSIGNED)}
+    if body is not None:
+        verb = "are" if body.name.endswith("s") else "is"
+        responses[400] = error_response(BAD_PATH + UNREADABLE)
+        responses[413] = error_response(f"The body is over {body.max_bytes} bytes.")
+        responses[415] = error_response("The body is not JSON.")
+        responses[422] = error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
+    responses |= {status: error_response(text) for status, text in (errors or {}).items()}
+    return responses | (also or {})
 
 
 def json_answer(status: int, body: BaseModel) -> Response[Any]:

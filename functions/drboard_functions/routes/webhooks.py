@@ -12,8 +12,9 @@ from aws_lambda_powertools.event_handler.openapi.params import Body, Path
 
 from ..errors import InvalidQuery
 from ..models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
-from .organisers import _ADMIN, _NO_BOARD, _admin_responses
+from .organisers import _ADMIN, _NO_BOARD
 from .params import BoardId, Organiser, RequestBody, Service, admin_router, origin, segment, takes
+from .responses import admin_responses as _admin_responses
 from .responses import json_answer, json_response
 
 WEBHOOK_BODY = RequestBody("webhook", 4096, InvalidQuery)

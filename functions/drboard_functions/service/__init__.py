@@ -6,8 +6,9 @@ returns the view models the API serialises and the CLI prints. Each concern has 
 ``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
 trail's reading), ``transfer`` (export, import and a board's recheck), ``aliases`` (the
-organisers' hand on racers' aliases), ``results`` (laps to analyse) and ``webhooks`` (the chat's
-announcements); ``copies`` holds the rules of copied runs.
+organisers' hand on racers' aliases), ``results`` (laps to analyse), ``webhooks`` (the chat's
+announcements) and ``seasons`` (boards added up into a season's standings, and its final);
+``copies`` holds the rules of copied runs.
 :class:`LeaderboardService` only hands each call to the room that answers it.
 
 A room's module loads, and the room is built, when the service first hands it a call: the pull
@@ -44,6 +45,7 @@ if TYPE_CHECKING:
     from .pushing import Pushing, check_record_size, scored_write
     from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
     from .results import LAPS_PAGE, Results
+    from .seasons import Seasons
     from .transfer import Transfer
     from .webhooks import Webhooks
 
@@ -93,6 +95,7 @@ if not TYPE_CHECKING:  # each room's class stands for its module until the servi
     Pushing = _Unloaded("pushing", "Pushing")
     Reading = _Unloaded("reading", "Reading")
     Results = _Unloaded("results", "Results")
+    Seasons = _Unloaded("seasons", "Seasons")
     Transfer = _Unloaded("transfer", "Transfer")
     Webhooks = _Unloaded("webhooks", "Webhooks")
 
@@ -143,6 +146,10 @@ class LeaderboardService:
         return Transfer(self._keeper, self.archive)
 
     @cached_property
+    def _seasons(self) -> Seasons:
+        return Seasons(self._keeper)
+
+    @cached_property
     def _aliases(self) -> Aliases:
         return Aliases(self._keeper)
 
@@ -191,6 +198,18 @@ class LeaderboardService:
     aliases = _handed_to("_aliases", Aliases.aliases)
     alias_audit = _handed_to("_aliases", Aliases.alias_audit)
 
+    create_season = _handed_to("_seasons", Seasons.create_season)
+    update_season = _handed_to("_seasons", Seasons.update_season)
+    add_round = _handed_to("_seasons", Seasons.add_round)
+    remove_round = _handed_to("_seasons", Seasons.remove_round)
+    set_final = _handed_to("_seasons", Seasons.set_final)
+    clear_final = _handed_to("_seasons", Seasons.clear_final)
+    close_season = _handed_to("_seasons", Seasons.close_season)
+    reopen_season = _handed_to("_seasons", Seasons.reopen_season)
+    seasons = _handed_to("_seasons", Seasons.seasons)
+    seasons_page = _handed_to("_seasons", Seasons.seasons_page)
+    season = _handed_to("_seasons", Seasons.season)
+    board_seasons = _handed_to("_seasons", Seasons.board_seasons)
     laps_page = _handed_to("_results", Results.laps_page)
     run_laps = _handed_to("_results", Results.run_laps)
 

@@ -16,6 +16,7 @@ from drboard_assembler.record import RaceType, Record
 from pydantic import ValidationError
 
 from .. import display, ranking
+from ..conditions import meets, unmet
 from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
 from ..identity import Caller
 from ..models.domain import AuditAction, AuditEvent, Board, BoardRules, BoardStatus, Entry, run_mismatches
@@ -50,8 +51,8 @@ _RACE_TITLE = {
 #: can take neither an official track's board id nor a named board's (which may not start so).
 CUSTOM_PREFIX = "custom."
 
-LOCKED = ("{!r} has entries: its track, timing method, minimum laps and flagged-run rule can no "
-          "longer change "
+LOCKED = ("{!r} has entries: its track, timing method, minimum laps, flagged-run rule and required "
+          "conditions can no longer change "
           "(create a new board, or export it and import into one with the new rules)")
 
 EVENT_ID = re.compile(r"^[0-9T:.Z-]{27}-[0-9a-f]{8}$")
@@ -157,6 +158,10 @@ def check_belongs(record: Record, board: Board) -> None:
     }
     problems = [problem[field] for field in
                 run_mismatches(record.track, record.direction, record.race_type, board)]
+    required = board.rules.conditions
+    if not any(meets(required, run) for run in record.evaluations):
+        problems.append("its evaluation ran under other conditions: "
+                        + ", ".join(unmet(required, record.best_run.conditions)))
     if problems:
         raise BoardMismatch(f"this run does not belong on {board.board_id!r}: "
                             + "; ".join(problems))

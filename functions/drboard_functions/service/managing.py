@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..errors import BoardExists, BoardLocked, BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
-from ..models.domain import BoardRules, BoardStatus
+from ..models.domain import BoardConditions, BoardRules, BoardStatus
 from ..models.requests import BoardChanges, BoardSpec
 from ..models.views import BoardView, RankCounters
 from .boards import (
@@ -16,6 +16,11 @@ from .boards import (
     spec_track,
     valid_board,
 )
+
+
+def _required(conditions: BoardConditions | None) -> BoardConditions | None:
+    """The conditions a board requires; None when none is given (any run's)."""
+    return conditions if conditions is not None and conditions.required() else None
 
 
 class Managing:
@@ -35,7 +40,7 @@ class Managing:
             board_id=spec.board_id, kind="named", track=track, direction=direction,
             race_type=spec.race_type, title=spec.title, description=spec.description,
             rules={"method": spec.method, "min_laps": spec.min_laps,
-                   "flagged_runs": spec.flagged_runs},
+                   "flagged_runs": spec.flagged_runs, "conditions": _required(spec.conditions)},
             opens_at=spec.opens_at, closes_at=spec.closes_at, cooldown_s=spec.cooldown_s,
             max_submissions=spec.max_submissions, designs=spec.designs, created_at=now,
         )
@@ -57,13 +62,14 @@ class Managing:
                 raise InvalidQuery(f"{name} cannot be cleared")
         cleared = {"description": "", "cooldown_s": 0, "designs": "public"}  # what null means
         updates = {name: cleared.get(name) if getattr(changes, name) is None else getattr(changes, name)
-                   for name in given if name not in ("method", "min_laps", "flagged_runs")}
+                   for name in given if name not in ("method", "min_laps", "flagged_runs", "conditions")}
         method = changes.method if "method" in given and changes.method else board.rules.method
         min_laps = changes.min_laps if "min_laps" in given else (
             None if method != board.rules.method else board.rules.min_laps)
         flagged_runs = changes.flagged_runs or board.rules.flagged_runs
+        conditions = _required(changes.conditions) if "conditions" in given else board.rules.conditions
         rules = BoardRules.model_validate({"method": method, "min_laps": min_laps,
-                                           "flagged_runs": flagged_runs})
+                                           "flagged_runs": flagged_runs, "conditions": conditions})
         rescores = rules != board.rules
         updated = valid_board(**(board.model_dump() | updates | {"rules": rules.model_dump()}))
         if rescores and stored.participants:

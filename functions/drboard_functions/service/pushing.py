@@ -60,6 +60,7 @@ from ..stores.base import (
 from ..views import design_of, entry_view, history_item
 from .boards import BoardKeeper, check_open, racer_key
 from .copies import Verdict, judge, run_prints
+from .seasons import check_entrant
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
 #: How many times a push is checked again when the board's settings change under it.
@@ -100,6 +101,7 @@ class Pushing:
             if stored is not None:
                 return self._duplicate_receipt(stored, record.racer)
             check_open(board, now)
+            check_entrant(self.keeper, board_id, record.racer)
             self._check_limits(board, key, record.racer, now)
             verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
             submission, entry = scored_write(record, board, now, verdict.flags)

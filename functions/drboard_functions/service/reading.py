@@ -156,13 +156,16 @@ class Reading:
         for view in page.entries:
             _, record = self._entry_and_record(board_id, view.racer)
             facts[view.racer] = design_facts(record)
-        leaders = [view.racer for view in page.entries if view.qualified][:top]
+        # a design the run's files do not describe says nothing of what fast models share
+        known = {racer: f for racer, f in facts.items()
+                 if f.algorithm is not None or f.action_space is not None}
+        leaders = [view.racer for view in page.entries if view.qualified and view.racer in known][:top]
         return Insights(
-            board=page.board, top=len(leaders), field=len(page.entries),
-            facts=shared_facts([facts[r] for r in leaders], list(facts.values())),
-            points=[SpeedPoint(racer=view.racer, max_speed=facts[view.racer].max_speed,
-                               time_ms=view.time_ms, top=view.racer in leaders)
-                    for view in page.entries],
+            board=page.board, top=len(leaders), field=len(known),
+            facts=shared_facts([facts[r] for r in leaders], list(known.values())),
+            points=[SpeedPoint(racer=view.racer, max_speed=speed, time_ms=view.time_ms,
+                               top=view.racer in leaders)
+                    for view in page.entries if (speed := facts[view.racer].max_speed) is not None],
         )
 
     def _require_designs(self, board: Board) -> None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from datetime import datetime
 from typing import TYPE_CHECKING, NamedTuple, Protocol
 
@@ -24,8 +24,9 @@ from ..models.domain import (
     WriteOutcome,
 )
 
-if TYPE_CHECKING:  # the chat's webhooks load with the first one a store reads
+if TYPE_CHECKING:  # the chat's webhooks and the seasons load with the stores' code that reads them
     from ..models.notices import Webhook
+    from ..models.seasons import RoundResults, Season, SeasonLink
 
 
 class StoredBoard(NamedTuple):
@@ -61,6 +62,15 @@ class FingerprintTaken(Exception):
     def __init__(self, racer_key: str) -> None:
         super().__init__(f"already on the board as {racer_key!r}")
         self.racer_key = racer_key
+
+
+class SeasonConflict(Exception):
+    """A season was not saved: a new one's id is taken, or it changed since it was read."""
+
+
+class SeasonSlice(NamedTuple):
+    seasons: list[Season]
+    after: str | None  # where the next page starts; None on the last page
 
 
 class LookalikeTaken(Exception):
@@ -368,6 +378,36 @@ class BoardStore(NoticeStore, Protocol):
 
     def alias_holder(self, racer_key: str) -> AliasClaim | None:
         """Who holds an alias."""
+
+    # ---- seasons ----------------------------------------------------------------------------
+
+    def get_season(self, season_id: str) -> Season | None:
+        """The season, or None."""
+
+    def save_season(self, season: Season, links: Mapping[str, SeasonLink | None],
+                    forget: Sequence[str] = ()) -> Season:
+        """Write the season if the stored one is at ``season.version - 1`` (a season at version
+        1 is new: written only if its id is free), else SeasonConflict and nothing written. In
+        the same write, each board of ``links`` gets that link to the season (None: loses it)
+        and its version goes up (its page shows the link), and the season's kept results of
+        the boards in ``forget`` (rounds it no longer has) go."""
+
+    def seasons_page(self, after: str | None, limit: int) -> SeasonSlice:
+        """Up to ``limit`` seasons by id, after the store's page token ``after``."""
+
+    def season_links(self, board_id: str) -> list[SeasonLink]:
+        """The seasons the board belongs to (as a round or a final), by season id."""
+
+    def boards_by_id(self, board_ids: Sequence[str]) -> dict[str, StoredBoard]:
+        """The boards of these ids that exist, read together."""
+
+    def round_results(self, season_id: str) -> dict[str, RoundResults]:
+        """The results the season keeps of its rounds, by board id."""
+
+    def keep_round_results(self, season_id: str, results: RoundResults) -> None:
+        """Keep a round's results for the season, unless it keeps them as of a later version
+        of the board already (a store may also decline results too big for it to keep: its
+        views then read the round again)."""
 
 
 class RecordArchive(Protocol):

@@ -61,6 +61,7 @@ from .base import (
     stored_record,
     stored_webhook,
 )
+from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
 
 if TYPE_CHECKING:
     from ..models.notices import Webhook
@@ -165,7 +166,7 @@ BUSY_TIMEOUT_S = 30.0
 BUSY_RETRY_AFTER_S = 1
 
 
-class SqliteStore:
+class SqliteStore(SqliteSeasons):
     """One SQLite connection per thread that uses the store (WAL: readers run alongside the one
     writer; writers take turns through BEGIN IMMEDIATE). ``:memory:`` is one database per
     connection, so that board keeps a single connection for every thread."""
@@ -181,7 +182,7 @@ class SqliteStore:
         self._enable_wal()
         with self._write():
             counted = self._has_table("rank_counts")
-            for statement in filter(str.strip, SCHEMA.split(";")):
+            for statement in filter(str.strip, (SCHEMA + SEASON_SCHEMA).split(";")):
                 self._db.execute(statement)
             if not counted:  # a board file from before the rank counts
                 self._count_every_board()

@@ -18,7 +18,9 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
 - ``F#<fingerprint>``: an evaluation's content on the board, and the racer (``racer_key``) who
   pushed it first: a copy under another racer fails the push transaction;
 - ``A#<event_id>``: one audit event (``data``), written once and never changed;
-- ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``).
+- ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``);
+- ``#SEASON#<season_id>``: the board's link to a season (see ``seasons.py``, which also keeps
+  the seasons themselves in partitions of their own).
 
 - ``K#<skeleton>``: an alias's confusable skeleton on the board, and the racer (``racer_key``)
   who holds it: a lookalike alias under another racer fails the push transaction;

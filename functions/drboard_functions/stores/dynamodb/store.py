@@ -1,9 +1,9 @@
 """The cloud board: one DynamoDB table (its one definition is ``BoardTable`` in template.yaml).
 
 How each thing is kept as an item is in ``codecs.py``; a push's transaction in
-``transaction.py``; the rank counters in ``ranks.py``. Aliases are claimed in one transaction
-that writes the alias's item and its sign-in's on condition that neither exists. Only this
-package talks to DynamoDB.
+``transaction.py``; the rank counters in ``ranks.py``; seasons in ``seasons.py``. Aliases are
+claimed in one transaction that writes the alias's item and its sign-in's on condition that
+neither exists. Only this package talks to DynamoDB.
 """
 
 from __future__ import annotations
@@ -96,6 +96,7 @@ from .codecs import (
 )
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
+from .seasons import DynamoDbSeasons
 from .transaction import PushTransaction, bans_condition
 
 if TYPE_CHECKING:
@@ -116,7 +117,7 @@ NOTICE_TTL = timedelta(days=30)
 
 
 @translating("the board's table")
-class DynamoDbStore:
+class DynamoDbStore(DynamoDbSeasons):
     """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
     same board, raise StoreBusy; a timeout or a lost connection StoreUnavailable (nothing
     written either way)."""
