@@ -1,15 +1,16 @@
 #!/usr/bin/env python3
-"""How fast the `drboard` command starts, against Python starting with click and rich alone.
+"""How fast the `drboard` command starts and answers, against the floors under it: Python
+starting with click and rich alone, and for a real `drboard pull`, a click + rich + sqlite3
+program that prints the same bytes from the same board (bench/pull_floor.py).
 
 Not a test: it runs each command many times, each in a fresh process, and prints one table of
-p50 times and their ratio to the floor (`python -c "import click, rich"`), each beside its
-target (PASS/FAIL). See bench/README.md.
+p50 times and their ratio to their floor, each beside its target (PASS/FAIL). See bench/README.md.
 
-    python bench/bench_cli.py              # 30 runs of each command: ~30 seconds
+    python bench/bench_cli.py              # 30 runs of each command: ~1 minute
     python bench/bench_cli.py --runs 10    # a quicker look
     python bench/bench_cli.py --json figures.json
 
-Standard library only, plus an installed drboard.
+Standard library only, plus an installed drboard (whose dependencies bring click and rich).
 """
 
 from __future__ import annotations
@@ -28,7 +29,12 @@ from pathlib import Path
 from figures import Report, drboard_command, p50_p95
 
 START_RATIO_MAX = 1.5
+PULL_RATIO_MAX = 1.5
 FLOOR = "python -c 'import click, rich'"
+PULL_FLOOR = "bench/pull_floor.py"  # click + rich + sqlite3, printing the same bytes
+PULL = "drboard pull --track reInvent2019"  # on a board holding the examples
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = sorted(p for p in (ROOT / "examples").iterdir() if p.is_dir())
 
 
 @dataclass(frozen=True)
@@ -36,30 +42,48 @@ class Case:
     name: str
     argv: list[str]
     exit_code: int = 0
-    target: bool = True  # held to START_RATIO_MAX, else shown for information
+    floor: str | None = FLOOR  # the case it is held to (None: it is a floor)
+    limit: float = START_RATIO_MAX
 
 
-def cases(drboard: list[str]) -> list[Case]:
+def cases(drboard: list[str], board: Path) -> list[Case]:
     return [
-        Case(FLOOR, [sys.executable, "-c", "import click, rich"], target=False),
+        Case(FLOOR, [sys.executable, "-c", "import click, rich"], floor=None),
+        Case(PULL_FLOOR, [sys.executable, str(ROOT / "bench" / "pull_floor.py"), "--db", str(board),
+                          "--board", "reInvent2019_track"], floor=None),
         Case("drboard --help", [*drboard, "--help"]),
         Case("drboard --version", [*drboard, "--version"]),
         Case("drboard pull --help", [*drboard, "pull", "--help"]),
         Case("drboard push --help", [*drboard, "push", "--help"]),
-        # A fresh board file has no board yet: the pull opens it, asks, and answers "no board".
-        Case("drboard pull --track reInvent2019 (empty local board)",
-             [*drboard, "pull", "--track", "reInvent2019"], exit_code=1, target=False),
+        Case(PULL, [*drboard, "pull", "--track", "reInvent2019"], floor=PULL_FLOOR, limit=PULL_RATIO_MAX),
     ]
 
 
 def isolated_env(scratch: Path) -> dict[str, str]:
-    """No saved settings or endpoint of this machine: every command uses a new embedded board."""
+    """No saved settings or endpoint of this machine: every command uses the scratch board."""
     env = dict(os.environ, XDG_DATA_HOME=str(scratch / "data"), XDG_CONFIG_HOME=str(scratch / "config"),
                DRBOARD_DB=str(scratch / "board.db"), COLUMNS="100")
     for variable in ("DRBOARD_ENDPOINT", "DRBOARD_RACER", "PYTHONPROFILEIMPORTTIME",
                      "PYTHONDONTWRITEBYTECODE"):
         env.pop(variable, None)
     return env
+
+
+def board_with_examples(drboard: list[str], env: dict[str, str]) -> Path:
+    """The scratch board (DRBOARD_DB), with every example run pushed to it."""
+    done = subprocess.run([*drboard, "push", *map(str, EXAMPLES)], env=env, capture_output=True, check=False)
+    if done.returncode:
+        raise SystemExit("pushing the examples failed:\n" + done.stderr.decode(errors="replace"))
+    return Path(env["DRBOARD_DB"])
+
+
+def check_same_bytes(all_cases: list[Case], env: dict[str, str]) -> None:
+    """The real pull and its floor print the same bytes (else the floor measures something else)."""
+    printed = {case.name: subprocess.run(case.argv, env=env, capture_output=True, check=True).stdout
+               for case in all_cases if case.name in (PULL, PULL_FLOOR)}
+    if printed[PULL] != printed[PULL_FLOOR] or b"Blaze" not in printed[PULL]:
+        raise SystemExit("the pull floor does not print what drboard pull prints:\n"
+                         + printed[PULL].decode() + "\n" + printed[PULL_FLOOR].decode())
 
 
 def run_once(case: Case, env: dict[str, str]) -> float:
@@ -86,17 +110,17 @@ def measure(all_cases: list[Case], runs: int, warmup: int, env: dict[str, str]) 
 
 
 def report_figures(report: Report, all_cases: list[Case], samples: dict[str, list[float]]) -> None:
-    floor_p50 = p50_p95(samples[FLOOR])[0]
-    report.add(f"`{FLOOR}` p50 (the floor)", floor_p50, "ms")
-    for case in all_cases[1:]:
+    p50s = {name: p50_p95(times)[0] for name, times in samples.items()}
+    for case in all_cases:
         p50, p95 = p50_p95(samples[case.name])
+        if case.floor is None:
+            report.add(f"`{case.name}` p50 (a floor)", p50, "ms", note=f"p95 {p95:,.0f} ms")
+            continue
         report.add(f"`{case.name}` p50", p50, "ms", note=f"p95 {p95:,.0f} ms")
-        ratio = p50 / floor_p50
-        if case.target:
-            report.add(f"`{case.name}` p50 / floor", ratio, "x", limit=START_RATIO_MAX)
-        else:
-            report.add(f"`{case.name}` p50 / floor", ratio, "x",
-                       note="no target: it imports the service and its models to answer")
+        report.add(f"`{case.name}` p50 / `{case.floor}`", p50 / p50s[case.floor], "x", limit=case.limit)
+        if case.floor != FLOOR:
+            report.add(f"`{case.name}` p50 / `{FLOOR}`", p50 / p50s[FLOOR], "x",
+                       note="no target: the pull also reads the board and prints the standings")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -113,14 +137,17 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    all_cases = cases(drboard_command(args.drboard))
+    drboard = drboard_command(args.drboard)
     report = Report(config={
         "runs": args.runs, "warmup": args.warmup, "python": sys.version.split()[0],
         "platform": platform.platform(), "cpus": os.cpu_count(),
         "started_at": datetime.now(UTC).isoformat(timespec="seconds"),
     })
     with tempfile.TemporaryDirectory(prefix="drboard-bench-cli-") as scratch:
-        samples = measure(all_cases, args.runs, args.warmup, isolated_env(Path(scratch)))
+        env = isolated_env(Path(scratch))
+        all_cases = cases(drboard, board_with_examples(drboard, env))
+        check_same_bytes(all_cases, env)
+        samples = measure(all_cases, args.runs, args.warmup, env)
     report_figures(report, all_cases, samples)
     config = report.config
     report.print_summary(f"drboard start-up benchmark · Python {config['python']} · "

@@ -1,6 +1,7 @@
 """Figures of the Lambda functions themselves: their cold start as the Lambda runtime sees it (the
-handler module's import, and import + first request), built size, and the pull handler's warm
-time against a bare DynamoDB Query of the same items (on DynamoDB Local).
+handler module's import, and import + first request, against the floor of a fresh Python that
+imports boto3 and makes one Query), built size, and the pull handler's warm time against a bare
+DynamoDB Query of the same items (on DynamoDB Local).
 
     python bench/bench_functions.py [--quick] [--built .aws-sam/build] [--python PYTHON] [--json FILE]
 
@@ -19,7 +20,6 @@ import os
 import platform
 import re
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
@@ -48,6 +48,8 @@ from tests.tablekit import create_board_table  # noqa: E402
 FIRST_REQUEST = {"push": ("push.json", 201), "pull": ("pull_board.json", 200),
                  "admin": ("admin_create_board.json", 201), "card": ("card_racer.json", 200)}
 COLD_IMPORT_TARGET_MS = 300
+#: A function's import + first request, over the floor's import of boto3 + a client + one Query.
+COLD_START_OVER_FLOOR_TARGET = 1.3
 BUILT_SIZE_TARGET_MB = 15
 #: The CardFunction ships the renderer (resvg, ~3 MB) and the card fonts (~0.8 MB) besides.
 CARD_SIZE_TARGET_MB = BUILT_SIZE_TARGET_MB + 4
@@ -82,12 +84,12 @@ def runtime_version() -> str:
 def lambda_environment(function: str, table: str, task_root: Path) -> dict[str, str]:
     """The environment Lambda gives ``function``: the template's variables (Globals, then the
     function's own; parameters at their defaults, resources by the names used here) and the
-    variables the Lambda runtime sets itself (which, e.g., switch Powertools' tracer on)."""
+    variables the Lambda runtime sets itself."""
     document = template()
     defaults = {name: str(p.get("Default", "")) for name, p in document["Parameters"].items()}
     names = defaults | {"BoardTable": table, "ArchiveBucket": ARCHIVE_BUCKET,
                         "RacerPool": "us-east-1_Bench0000", "CliClient": "benchclient",
-                        "RacerSignInDomain": "drboard-bench", "BoardApi": "bench00000",
+                        "RacerSignInDomain": "drboard-bench", "BoardApi": "bench00api",
                         "AWS::Region": "us-east-1", "AWS::URLSuffix": "amazonaws.com"}
 
     def value(raw: Any) -> str:
@@ -114,8 +116,7 @@ def lambda_environment(function: str, table: str, task_root: Path) -> dict[str, 
         "AWS_REGION": REGION, "AWS_DEFAULT_REGION": REGION,
         "LAMBDA_TASK_ROOT": str(task_root),
         "_HANDLER": str(properties["Handler"]),
-        "AWS_XRAY_CONTEXT_MISSING": "LOG_ERROR",
-        "_X_AMZN_TRACE_ID": TRACE_ID,  # Tracing: Active; sampled, so the subsegments are sent
+        "_X_AMZN_TRACE_ID": TRACE_ID,  # Tracing: Active, as Lambda sets it for a sampled request
         "TZ": ":UTC", "LANG": "en_US.UTF-8",
     }
 
@@ -194,9 +195,15 @@ class Sandbox:
             "AWS_SESSION_TOKEN": "bench",
         } | self.endpoints
 
-    def run(self, kind: str, table: str, *arguments: str) -> subprocess.CompletedProcess[str]:
-        done = subprocess.run([self.python, *arguments], cwd=self.bundles[kind], capture_output=True,
-                              text=True, env=self.environment(kind, table))
+    def run(self, kind: str, table: str, *arguments: str,
+            bare: bool = False) -> subprocess.CompletedProcess[str]:
+        """``python ARGUMENTS`` in the function's folder and environment; ``bare``: in the same
+        environment with the runtime's packages only (the floor: no function code at all)."""
+        env = self.environment(kind, table)
+        if bare:
+            env["PYTHONPATH"] = str(self.runtime)
+        done = subprocess.run([self.python, *arguments], cwd=self.runtime if bare else self.bundles[kind],
+                              capture_output=True, text=True, env=env)
         if done.returncode:
             sys.exit(f"bench_functions: {' '.join(arguments[:3])} failed:\n{done.stderr[-3000:]}")
         return done
@@ -249,6 +256,47 @@ print(json.dumps({"import_ms": (imported - start) * 1000, "first_ms": (answered 
 """
 
 
+#: The floor, run as the functions are but with none of their code: import boto3, make a DynamoDB
+#: client and make one Query, the one the pull function's first request makes (the board's item
+#: and its top entries, read from the by_rank index: the event's limit + 1 items, consistent),
+#: on the board the push made; timed as FIRST_REQUEST_CODE times.
+FLOOR_CODE = """
+import json, sys, time
+start = time.perf_counter()
+import boto3
+client = boto3.client("dynamodb")
+page = client.query(TableName=sys.argv[1], IndexName="by_rank", ConsistentRead=True,
+                    Limit=int(sys.argv[3]) + 1, KeyConditionExpression="board = :board",
+                    ExpressionAttributeValues={":board": {"S": sys.argv[2]}})
+answered = time.perf_counter()
+print(json.dumps({"first_ms": (answered - start) * 1000, "items": len(page["Items"])}))
+"""
+
+
+#: The floor with the libraries every function is built on imported first (Powertools' resolver,
+#: logger and metrics, and pydantic), run in the pull function's folder: what a function pays
+#: before any code of drboard's own. Shown beside the floor, without a target.
+STACK_CODE = FLOOR_CODE.replace("import boto3\n", """import pydantic
+from aws_lambda_powertools import Logger, Metrics
+from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
+Logger(); Metrics(); APIGatewayHttpResolver(enable_validation=True)
+import boto3
+""")
+
+
+def floor(sandbox: Sandbox, table: str, code: str = FLOOR_CODE) -> float:
+    """The floor's time, on the board the pull function reads (which the push made); with
+    STACK_CODE, the floor with the functions' libraries."""
+    event = json.loads((ROOT / "events" / FIRST_REQUEST["pull"][0]).read_text())
+    board, limit = event["pathParameters"]["board"], event["queryStringParameters"]["limit"]
+    done = sandbox.run("pull", table, "-c", code, table, board, limit, bare=code == FLOOR_CODE)
+    result = json.loads(done.stdout.splitlines()[-1])
+    if result["items"] != 2:
+        sys.exit(f"bench_functions: the floor's Query read {result['items']} items, not the board's "
+                 "and the push's entry")
+    return float(result["first_ms"])
+
+
 def first_request(sandbox: Sandbox, kind: str, table: str) -> dict[str, Any]:
     event, expected = FIRST_REQUEST[kind]
     done = sandbox.run(kind, table, "-c", FIRST_REQUEST_CODE, kind, str(ROOT / "events" / event))
@@ -274,21 +322,23 @@ class StubS3(BaseHTTPRequestHandler):
         pass
 
 
-def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> dict[str, dict[str, list[Any]]]:
-    """``runs`` cold starts of each function, alternated so that all see the same load: each
-    round makes a new table, and each function answers its first request on it in turn (see
-    FIRST_REQUEST); a function without one is only imported."""
+Samples = dict[str, dict[str, list[Any]]]
+
+
+def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> tuple[Samples, dict[str, list[float]]]:
+    """``runs`` cold starts of each function, and of the floor, alternated so that all see the
+    same load: each round makes a new table, and each function answers its first request on it
+    in turn (see FIRST_REQUEST; a function without one is only imported), then the floor and the
+    floor with the functions' libraries make their Query."""
     s3 = ThreadingHTTPServer(("127.0.0.1", 0), StubS3)
     threading.Thread(target=s3.serve_forever, daemon=True).start()
-    xray = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)  # where the tracer sends segments
-    xray.bind(("127.0.0.1", 0))
     sandbox.endpoints = {"AWS_ENDPOINT_URL_DYNAMODB": server.endpoint,
-                         "AWS_ENDPOINT_URL_S3": f"http://127.0.0.1:{s3.server_address[1]}",
-                         "AWS_XRAY_DAEMON_ADDRESS": f"127.0.0.1:{xray.getsockname()[1]}"}
+                         "AWS_ENDPOINT_URL_S3": f"http://127.0.0.1:{s3.server_address[1]}"}
     client = server.client()
+    floors: dict[str, list[float]] = {"floor": [], "stack": []}
     order = sorted(HANDLERS.values(), key=lambda k: list(FIRST_REQUEST).index(k) if k in FIRST_REQUEST
                    else len(FIRST_REQUEST))
-    samples: dict[str, dict[str, list[Any]]] = {
+    samples: Samples = {
         kind: {"import": [], "first": [], "importtime": [], "compiled": []} for kind in HANDLERS.values()}
     try:
         for round_ in range(runs + 1):  # the first round warms up the server and the file cache
@@ -302,13 +352,16 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> dict[str,
                         samples[kind]["import"].append(result["import_ms"])
                         samples[kind]["first"].append(result["first_ms"])
                         samples[kind]["compiled"].append(result["compiled"])
+            floor_ms, stack_ms = floor(sandbox, table), floor(sandbox, table, STACK_CODE)
+            if round_:
+                floors["floor"].append(floor_ms)
+                floors["stack"].append(stack_ms)
             client.delete_table(TableName=table)
     finally:
         s3.shutdown()
         s3.server_close()
-        xray.close()
         sandbox.endpoints = {}
-    return samples
+    return samples, floors
 
 
 # ---- built size -------------------------------------------------------------------------------
@@ -395,13 +448,21 @@ def main(argv: list[str] | None = None) -> int:
     sandbox = Sandbox(python)
     try:
         with DynamoDbLocal() as server:
-            cold = cold_starts(server, sandbox, runs)
+            cold, floors = cold_starts(server, sandbox, runs)
             handler, bare = handler_against_query(server, args.racers, reps)
     finally:
         sandbox.close()
 
     where = (f"{runs} fresh processes of Python {runtime_version()} in the function as built for "
              f"{host_platform()}, Lambda's environment")
+    floor_p50, floor_p95 = p50_p95(floors["floor"])
+    report.add("floor: import boto3 + a client + one Query p50", floor_p50, "ms",
+               note=f"p95 {floor_p95:.0f} ms; {where} but with none of the function's code, the "
+                    "pull's Query of the board the push made, on DynamoDB Local")
+    stack_p50, _ = p50_p95(floors["stack"])
+    report.add("floor with Powertools (resolver, logger, metrics) and pydantic imported / floor",
+               stack_p50 / floor_p50, "x", note=f"no target: {stack_p50:.0f} ms p50, what any function "
+                                               "built on these libraries pays before drboard's own code")
     for kind, samples in cold.items():
         p50, _ = p50_p95(samples["importtime"])
         report.add(f"cold import of the {kind} handler module p50", p50, "ms",
@@ -411,9 +472,11 @@ def main(argv: list[str] | None = None) -> int:
         p50, p95 = p50_p95(samples["first"])
         import_p50, _ = p50_p95(samples["import"])
         report.add(f"cold start of the {kind} function: import + first request p50", p50, "ms",
-                   note=f"no target; p95 {p95:.0f} ms, of which the import (wall time, no importtime) "
+                   note=f"p95 {p95:.0f} ms, of which the import (wall time, no importtime) "
                         f"p50 {import_p50:.0f} ms; first request events/{FIRST_REQUEST[kind][0]} on "
                         "DynamoDB Local and a stub S3, whose answers are included")
+        report.add(f"cold start of the {kind} function / floor", p50 / floor_p50, "x",
+                   limit=COLD_START_OVER_FLOOR_TARGET)
         compiled = sorted({name for names in samples["compiled"] for name in names})
         report.add(f"modules the {kind} function's cold start compiles", len(compiled), "",
                    ok=not compiled, target="0",

@@ -1,20 +1,22 @@
 """drboard's assembler: a DeepRacer run folder -> one validated Record. No AWS, no network.
 
-The Record schema and the track catalog import lightly; the file readers (YAML, archives) load
-on first use, so the Lambda functions, which only validate records, never import them.
+Importing the package loads none of its modules: each name below loads its module on first use
+(``from drboard_assembler import limits`` reads a few constants, not the Record schema), so a
+Lambda function or a CLI command pays only for what it uses, and the file readers (YAML,
+archives) load only where runs are assembled.
 """
 
 from __future__ import annotations
 
+from importlib import import_module
 from typing import TYPE_CHECKING, Any
-
-from .catalog import TrackCatalog, UnknownTrackError, default_catalog
-from .errors import AssemblyError
-from .record import Record
 
 if TYPE_CHECKING:
     from .assembly import Overrides, assemble, planned_trials
+    from .catalog import TrackCatalog, UnknownTrackError, default_catalog
+    from .errors import AssemblyError
     from .layout import evaluation_files
+    from .record import Record
 
 __version__ = "0.1.0"
 
@@ -32,13 +34,14 @@ __all__ = [
 ]
 
 
+#: Where each exported name lives.
+_HOMES = {"AssemblyError": "errors", "Overrides": "assembly", "Record": "record",
+          "TrackCatalog": "catalog", "UnknownTrackError": "catalog", "assemble": "assembly",
+          "default_catalog": "catalog", "evaluation_files": "layout", "planned_trials": "assembly"}
+
+
 def __getattr__(name: str) -> Any:
-    if name in ("Overrides", "assemble", "planned_trials"):
-        from . import assembly
-
-        return getattr(assembly, name)
-    if name == "evaluation_files":
-        from . import layout
-
-        return layout.evaluation_files
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(f"{__name__}.{home}"), name)

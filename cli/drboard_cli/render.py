@@ -13,9 +13,8 @@ import io
 import json
 from collections.abc import Iterable
 from datetime import UTC, datetime, timedelta
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
-from drboard_assembler.record import Record
 from drboard_functions import conditions
 from drboard_functions.display import (
     DASH,
@@ -52,14 +51,18 @@ from drboard_functions.models.views import (
     RacerView,
 )
 from rich.console import Console, Group
-from rich.panel import Panel
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 from rich.text import Text
 
-from .invite import Invited
 from .terminal import printable
-from .transfer import ExportCounts, ImportSummary
+
+if TYPE_CHECKING:  # what only some commands show loads with them: `pull` never loads the export's
+    from drboard_assembler.record import Record
+    from rich.panel import Panel
+    from rich.progress import Progress
+
+    from .invite import Invited
+    from .transfer import ExportCounts, ImportSummary
 
 #: Beside a run the board's consistency checks flagged (`drboard show` says which checks).
 FLAG_MARK = "⚑"
@@ -165,6 +168,8 @@ def _window_label(board: BoardView) -> str:
 
 def board_panel(board: BoardView) -> Panel:
     """One board's settings, as an organiser set them."""
+    from rich.panel import Panel
+
     grid = Table.grid(padding=(0, 2))
     grid.add_column(style="bold")
     grid.add_column()
@@ -215,6 +220,8 @@ def laps_line(board_id: str, rows: int, output: str | None) -> Text:
 
 def progress(console: Console) -> Progress:
     """A progress bar on a terminal; nothing when the output is a file or a pipe."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeRemainingColumn(), console=console, transient=True,
                     disable=not console.is_terminal)

@@ -24,7 +24,7 @@ class Caller(BaseModel):
     """A signed-in caller. ``principal`` is stable and unique (``cognito:<sub>``,
     ``iam:<arn>``, ``join:<id>``, ``local``); ``name`` is for people (audit, whoami)."""
 
-    model_config = ConfigDict(frozen=True)
+    model_config = ConfigDict(frozen=True, defer_build=True)  # built on first use, not at import
 
     principal: str
     name: str = ""
@@ -78,6 +78,8 @@ class SignIn(BaseModel):
     `drboard login --endpoint URL`. The edges put one in the resolver's context
     (``app.append_context(sign_in=...)``): the functions from the stack's settings,
     `drboard serve` from its own options."""
+
+    model_config = ConfigDict(defer_build=True)
 
     kind: Literal["cognito", "join-code", "none"] = "none"
     region: str | None = None

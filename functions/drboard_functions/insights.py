@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Sequence
-from statistics import median
 from typing import Any
 
 from drboard_assembler.record import Hyperparameters, Record
@@ -113,6 +112,8 @@ def algorithm_differences(facts: Sequence[DesignFacts], differing: Sequence[str]
 def shared_facts(top: Sequence[DesignFacts], field: Sequence[DesignFacts]) -> list[SharedFact]:
     """Each fact of the top designs against the field's: the most common choice and its share,
     or the median number. Facts no design states are left out."""
+    from statistics import median  # only the insights use it: a cold start does not load it
+
     shared = []
     for name, label in LABELS.items():
         top_values = [v for f in top if (v := getattr(f, name)) is not None]

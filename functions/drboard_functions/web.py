@@ -6,8 +6,9 @@ titles); links are built with :func:`urllib.parse.quote`. The style sheet and th
 inlined into each page and allowed by their hashes in the page's Content-Security-Policy
 (:func:`content_security_policy`), so a page loads nothing else and runs nothing else.
 
-Jinja2 is imported, and its environment built, on the first page a process renders: the pull
-function's JSON routes never pay for it at a cold start.
+Jinja2 is imported, and its environment built, on the first page a process renders, and the
+charts' module on the first page that draws one: the pull function's JSON routes never pay for
+them at a cold start.
 
 A board's page keeps itself up to date with the script (``static/live.js``): see its comment.
 Without script, it reloads itself every 30 seconds.
@@ -27,7 +28,6 @@ from urllib.parse import quote, urlencode
 
 from drboard_assembler.record import Record
 
-from . import charts
 from . import conditions as condition_texts
 from .display import DASH, PRIVATE_DESIGN, UNKNOWN, duration, gap, method_label, percent, seconds, when
 from .display import design_summary as _design_summary
@@ -37,8 +37,10 @@ from .models.domain import BoardStatus, Design, TimingMethod
 from .models.seasons import SeasonLink
 from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # both load with the first page that needs them (see the module's docstring)
     from jinja2 import Environment
+
+    from . import charts
 
 REFRESH_S = 30
 
@@ -251,6 +253,8 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
     Open Graph meta, with ``origin`` for its absolute URLs), the counted run's laps, the action
     space, the hyperparameters, the training, the racer's submissions over time and any flags,
     and links to compare with the leader and the racer just ahead."""
+    from . import charts
+
     entry, record, board = view.entry, view.record, view.board
     standing = (f"#{entry.rank} on {board.title} · {seconds(entry.time_ms)}" if entry.qualified
                 else f"#{entry.rank} on {board.title} · {percent(entry.best_completion_pct)} done")
@@ -316,6 +320,8 @@ def racer_page(view: RacerView, *, leader: str | None = None, ahead: str | None 
 
 
 def _history_chart(view: RacerView) -> charts.Figure | None:
+    from . import charts
+
     timed = [charts.Point(x=n, y=item.time_ms / 1000,
                           label=f"{when(item.submitted_at)}: {seconds(item.time_ms)}",
                           strong=item.is_best)
@@ -364,6 +370,8 @@ def compare_page(comparison: Comparison, records: Sequence[Record | None] = ()) 
 
 
 def _laps_chart(names: Sequence[str], runs: Sequence[Any]) -> charts.Figure:
+    from . import charts
+
     series = []
     for name, run in zip(names, runs, strict=True):
         laps = run.laps if run is not None else []
@@ -397,6 +405,8 @@ def _lap_rows(runs: Sequence[Any]) -> list[dict[str, Any]]:
 def insights_page(insights: Insights) -> str:
     """``/boards/{board}/insights/view``: what the top models share against the field, and
     top speed against lap time."""
+    from . import charts
+
     board = insights.board
     facts = [{"label": f.label, "top": f.top + _share(f.top_share),
               "field": f.field + _share(f.field_share)} for f in insights.facts]
@@ -543,6 +553,8 @@ def _source_rows(record: Record) -> list[tuple[str, str]]:
 
 
 def _action_space_chart(record: Record) -> charts.Figure | None:
+    from . import charts
+
     space = record.design.action_space
     if space is None:
         return None

@@ -1,5 +1,8 @@
 """The commands that read a board: pull, boards, compare, insights, history, show, status and
-card."""
+card.
+
+Those that only read and print end the process as soon as their output is out (:func:`finish`);
+card, which writes a file, ends as usual."""
 
 from __future__ import annotations
 
@@ -8,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ..main import Context, edge, out, pass_context
+from ..main import Context, edge, finish, out, pass_context
 
 if TYPE_CHECKING:
     from ..target import BoardClient
@@ -59,6 +62,7 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
         else:
             page = _track_page(ctx.board, track or "", board_id, top)
         _emit(page, fmt, output)
+    finish()
 
 
 def _track_page(client: BoardClient, track: str, board_id: str, top: int) -> Any:
@@ -143,6 +147,7 @@ def boards(ctx: Context, wanted: str | None, fmt: str) -> None:
             out().print(f"No {wanted.lower()} boards.")
         else:
             out().print("No boards yet: push a run with `drboard push PATH`.")
+    finish()
 
 
 @click.command()
@@ -168,6 +173,7 @@ def compare(ctx: Context, racers: tuple[str, ...], track: str | None, board: str
             click.echo(render.json_text(comparison.model_dump_json(indent=2)))
         else:
             out().print(render.comparison_table(comparison))
+    finish()
 
 
 @click.command()
@@ -191,6 +197,7 @@ def insights(ctx: Context, track: str | None, board: str | None, top: int, fmt: 
             click.echo(render.json_text(found.model_dump_json(indent=2)))
         else:
             out().print(render.insights_table(found))
+    finish()
 
 
 def racer_options(command: Any) -> Any:
@@ -236,6 +243,7 @@ def history(ctx: Context, racer: str | None, track: str | None, board: str | Non
             out().print(render.history_table(name, items, out().width))
         else:
             out().print(f"No submissions by {name} yet.", markup=False)
+    finish()
 
 
 @click.command()
@@ -254,6 +262,7 @@ def show(ctx: Context, racer: str, track: str | None, board: str | None, fmt: st
             click.echo(render.json_text(view.model_dump_json(indent=2)))
         else:
             out().print(render.racer_panel(view))
+    finish()
 
 
 @click.command()
@@ -276,6 +285,7 @@ def status(ctx: Context, racer: str | None, track: str | None, board: str | None
             click.echo(render.json_text(summary.model_dump_json(indent=2)))
         else:
             out().print(render.status_table(summary, out().width))
+    finish()
 
 
 @click.command()

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from aws_lambda_powertools import Logger, Metrics, Tracer
+from aws_lambda_powertools import Logger, Metrics
 from aws_lambda_powertools.logging import correlation_paths
 from aws_lambda_powertools.utilities.typing import LambdaContext
 
@@ -14,7 +14,6 @@ from ..routes import build_app, pull_router
 from . import wiring
 
 logger = Logger()
-tracer = Tracer(patch_modules=wiring.TRACED_MODULES)
 metrics = Metrics()
 
 app = build_app(pull_router)
@@ -22,7 +21,6 @@ app = build_app(pull_router)
 
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
 @metrics.log_metrics(capture_cold_start_metric=True)
-@tracer.capture_lambda_handler
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
     app.append_context(service=wiring.service_from_environment(),
                        sign_in=wiring.sign_in_from_environment())

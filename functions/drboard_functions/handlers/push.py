@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from aws_lambda_powertools import Logger, Metrics, Tracer
+from aws_lambda_powertools import Logger, Metrics
 from aws_lambda_powertools.event_handler import APIGatewayHttpResolver, Response
 from aws_lambda_powertools.event_handler.middlewares import NextMiddleware
 from aws_lambda_powertools.logging import correlation_paths
@@ -16,7 +16,6 @@ from ..routes import build_app, canonical_event, push_router
 from . import wiring
 
 logger = Logger()
-tracer = Tracer(patch_modules=wiring.TRACED_MODULES)
 metrics = Metrics()
 
 SUBMISSION_METRICS = {201: "SubmissionAccepted", 200: "DuplicateSubmission"}
@@ -40,7 +39,6 @@ app.use(middlewares=[count_submissions])
 
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
 @metrics.log_metrics(capture_cold_start_metric=True)
-@tracer.capture_lambda_handler
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
     app.append_context(service=wiring.service_from_environment())
     return app.resolve(canonical_event(event), context)

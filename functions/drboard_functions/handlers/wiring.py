@@ -22,12 +22,6 @@ from ..service import LeaderboardService
 if TYPE_CHECKING:
     from ..notify.notifier import Notifier
 
-#: What the handlers' X-Ray tracer patches: the AWS SDK, the one library that calls out. (By
-#: default Powertools patches every library the X-Ray SDK knows that is installed, e.g. sqlite3
-#: and http.client, at import, for calls the functions never make.)
-TRACED_MODULES = ("botocore",)
-
-
 @cache
 def service_from_environment() -> LeaderboardService:
     return services.dynamodb_service(os.environ["TABLE_NAME"],

@@ -76,6 +76,8 @@ Designs = Literal["public", "after-close"]
 
 
 class Model(BaseModel):
+    # defer_build: a model's schema is built when it is first used, not when its module is
+    # imported (a function imports more models than its first request uses).
     model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
 

@@ -10,52 +10,54 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
   ``admin_router`` (:mod:`.organisers`): the organisers' routes (create, change, close, delete,
   restore, export and import boards, moderation, audit), every one IAM-signed in the cloud and
   answered by ``drboard serve`` only to the computer it runs on.
-- :mod:`.seasons`: the seasons' reads and page (pull) and their organisers' routes (admin).
+- :mod:`.seasons`: the seasons' reads and pages (pull); :mod:`.season_changes`: the organisers'
+  changes to seasons (admin).
 - :mod:`.params` holds what the routes share: the routers, the request parameters, who is
   calling, and each JSON body's bound; :mod:`.responses` what they answer.
 - The routes never build a service: the caller puts one in the resolver's context before each
   ``resolve`` (``app.append_context(service=...)``); the routes reach it through ``Depends``.
 - :mod:`.app` builds the resolver, and is the one place domain errors become HTTP statuses.
+- Importing this package loads nothing: each name loads its module on first use, and a router
+  loads the modules that register its routes (:data:`ROUTE_MODULES`), so each function imports
+  only its own routes (the pull function no push or admin route, the admin function no page).
 
 Run ``python -m drboard_functions.routes > functions/openapi.json`` to regenerate the committed
 OpenAPI document (``tests/unit/test_openapi.py`` fails when it drifts from the code).
 """
 
-from . import (  # noqa: F401 - each registers its routes
-    boards,
-    cards,
-    organisers,
-    pages,
-    results,
-    seasons,
-    submissions,
-    webhooks,
-)
-from .app import (
-    COGNITO_PREFIX,
-    ERROR_STATUS,
-    BoardResolver,
-    build_app,
-    canonical_event,
-    error_body,
-    error_headers,
-    refusal,
-    status_of,
-    unreadable,
-)
-from .openapi import openapi_document
-from .params import (
-    ADMIN_TAG,
-    IMPORT_BODY,
-    MAX_BOARD_BODY_BYTES,
-    RequestBody,
-    admin_router,
-    bounded_json,
-    card_router,
-    pull_router,
-    push_router,
-)
-from .responses import ErrorBody, FieldProblem, page_etag
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from aws_lambda_powertools.event_handler.api_gateway import Router
+
+    from .app import (
+        COGNITO_PREFIX,
+        ERROR_STATUS,
+        BoardResolver,
+        build_app,
+        canonical_event,
+        error_body,
+        error_headers,
+        refusal,
+        status_of,
+        unreadable,
+    )
+    from .openapi import openapi_document
+    from .params import (
+        ADMIN_TAG,
+        IMPORT_BODY,
+        MAX_BOARD_BODY_BYTES,
+        RequestBody,
+        admin_router,
+        bounded_json,
+        card_router,
+        pull_router,
+        push_router,
+    )
+    from .responses import ErrorBody, FieldProblem, page_etag
 
 __all__ = [
     "ADMIN_TAG",
@@ -82,3 +84,32 @@ __all__ = [
     "status_of",
     "unreadable",
 ]
+
+#: The modules whose routes each router holds: taking a router from this package imports them.
+ROUTE_MODULES = {"push_router": ("submissions",), "pull_router": ("boards", "pages", "results", "seasons"),
+                 "admin_router": ("organisers", "season_changes", "webhooks"), "card_router": ("cards",)}
+#: The module each other name of the package comes from.
+_HOMES = {"COGNITO_PREFIX": "app", "ERROR_STATUS": "app", "BoardResolver": "app", "build_app": "app",
+          "canonical_event": "app", "error_body": "app", "error_headers": "app", "refusal": "app",
+          "status_of": "app", "unreadable": "app", "openapi_document": "openapi",
+          "ADMIN_TAG": "params", "IMPORT_BODY": "params", "MAX_BOARD_BODY_BYTES": "params",
+          "RequestBody": "params", "bounded_json": "params", "ErrorBody": "responses",
+          "FieldProblem": "responses", "page_etag": "responses"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in ROUTE_MODULES:
+        return router(name)
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(f"{__name__}.{home}"), name)
+
+
+def router(name: str) -> Router:
+    """``push_router``, ``pull_router``, ``admin_router`` or ``card_router``, with every one of its
+    routes."""
+    for module in ROUTE_MODULES[name]:
+        import_module(f"{__name__}.{module}")
+    found: Router = getattr(import_module(f"{__name__}.params"), name)
+    return found

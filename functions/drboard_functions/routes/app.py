@@ -40,7 +40,6 @@ from aws_lambda_powertools.event_handler.openapi.exceptions import (
 )
 from drboard_assembler.errors import field_path
 
-from .. import web
 from ..errors import (
     AliasTaken,
     Banned,
@@ -82,6 +81,8 @@ from .standings import answer, origin_of, standings_of, wanted
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
     from aws_lambda_powertools.utilities.typing import LambdaContext
+
+    from .. import web
 
 
 TITLE = "drboard"
@@ -195,6 +196,8 @@ def _answer(app: APIGatewayHttpResolver, error: DomainError) -> Response[Any]:
     status = status_of(error)
     headers = error_headers(error)
     if _is_page_request(app):
+        from .. import web  # the pages' module: only the pull function has pages
+
         return page_answer(web.error_page(status.value, status.phrase, error.message), status, headers)
     return Response(status_code=status, content_type=content_types.APPLICATION_JSON,
                     body=error_body(error).model_dump(mode="json"), headers=headers)
@@ -294,6 +297,8 @@ class BoardResolver(APIGatewayHttpResolver):
                 else kept.headers, "cookies": []}
 
     def _invite(self, event: Mapping[str, Any]) -> web.Invite:
+        from .. import web  # only a page asks how racers join
+
         given = self.context.get("invite")
         invite = given() if callable(given) else None
         if isinstance(invite, web.Invite):

@@ -15,9 +15,8 @@ from typing import Any
 
 from aws_lambda_powertools.event_handler import Response
 
-from .params import BoardId, IfNoneMatch, RacerAlias, Service, card_router, segment
+from .params import BoardId, IfNoneMatch, RacerAlias, SeasonId, Service, card_router, segment
 from .responses import BAD_PATH, api_version, error_response
-from .seasons import SeasonId
 
 SVG = "image/svg+xml"
 PNG = "image/png"

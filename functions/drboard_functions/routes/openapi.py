@@ -3,9 +3,14 @@
 from __future__ import annotations
 
 import json
+from importlib import import_module
 
 from .app import build_app
-from .params import admin_router, card_router, pull_router, push_router
+
+#: Every route module, in the order the document lists their routes (each router's routes in
+#: the order their modules register them).
+ROUTE_MODULES_IN_ORDER = ("boards", "cards", "organisers", "pages", "results", "seasons",
+                          "season_changes", "submissions", "webhooks")
 
 _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
 #: Every route's answer when the board's storage is busy or unreachable (nothing was written).
@@ -27,6 +32,10 @@ def openapi_document() -> str:
     default "422 Validation Error" Powertools lists on every validated route. Here a bad query
     or path parameter answers 400 and a bad body 422, both with an :class:`ErrorBody`, and the
     routes list those responses themselves."""
+    for module in ROUTE_MODULES_IN_ORDER:
+        import_module(f"{__package__}.{module}")
+    from . import admin_router, card_router, pull_router, push_router
+
     document = json.loads(build_app(push_router, pull_router, admin_router,
                                     card_router).get_openapi_json_schema())
     for operations in document["paths"].values():

@@ -9,7 +9,6 @@ from typing import Annotated, Any, Literal
 
 from aws_lambda_powertools.event_handler import Response, content_types
 from aws_lambda_powertools.event_handler.openapi.params import Body, Query
-from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import limits
 
 from ..errors import InvalidQuery
@@ -40,32 +39,13 @@ from .params import (
     Organiser,
     RacerAlias,
     ReplaceHolder,
-    RequestBody,
     Service,
     admin_router,
     segment,
     takes,
 )
-from .responses import BAD_PATH, UNREADABLE, UNSIGNED, error_response, json_answer, json_response
-
-
-def _admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
-                     body: RequestBody | None = None,
-                     errors: dict[int, str] | None = None,
-                     also: dict[int, OpenAPIResponse] | None = None) -> dict[int, OpenAPIResponse]:
-    """An organiser route's answers: its own, the refusal of unsigned requests, a body's (413,
-    415, 422), then its own errors and other answers (which replace the general ones)."""
-    responses: dict[int, OpenAPIResponse] = {ok_status: ok, 400: error_response(BAD_PATH),
-                                             403: error_response(UNSIGNED)}
-    if body is not None:
-        verb = "are" if body.name.endswith("s") else "is"
-        responses[400] = error_response(BAD_PATH + UNREADABLE)
-        responses[413] = error_response(f"The body is over {body.max_bytes} bytes.")
-        responses[415] = error_response("The body is not JSON.")
-        responses[422] = error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
-    responses |= {status: error_response(text) for status, text in (errors or {}).items()}
-    return responses | (also or {})
-
+from .responses import admin_responses as _admin_responses
+from .responses import json_answer, json_response
 
 BanScope = Annotated[Literal["event", "board"], Query(
     description="`event` (default): every board of the deployment; `board`: this board only.")]

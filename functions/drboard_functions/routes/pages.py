@@ -8,7 +8,6 @@ serving laptop must still tell racers the address their laptops reach)."""
 from __future__ import annotations
 
 from http import HTTPStatus
-from typing import Any
 
 from aws_lambda_powertools.event_handler import Request, Response
 
@@ -28,6 +27,7 @@ from .params import (
     Screen,
     Service,
     Top,
+    origin,
     pull_router,
     segment,
 )
@@ -40,7 +40,7 @@ from .responses import (
     page_etag,
     page_policy,
 )
-from .standings import Kind, Wanted, answer, origin_of, standings_of
+from .standings import Kind, Wanted, answer, standings_of
 
 
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],
@@ -95,11 +95,7 @@ def _invite(request: Request) -> web.Invite:
         invite = given()
         if isinstance(invite, web.Invite):
             return invite
-    return web.Invite(endpoint=_origin(request.resolved_event))
-
-
-def _origin(event: Any) -> str:
-    return origin_of(event.headers or {}, (event.raw_event.get("requestContext") or {}).get("domainName"))
+    return web.Invite(endpoint=origin(request.resolved_event))
 
 
 @pull_router.get(

@@ -35,6 +35,7 @@ from ..errors import (
 from ..identity import Caller, SignIn, caller_from_event
 from ..models.domain import MAX_PAGE
 from ..service import MAX_COMPARED, MAX_TOP, LeaderboardService
+from .standings import origin_of
 
 DEFAULT_LIMIT = 100
 MAX_PATH_PARAM_CHARS = 256  # a board id or a racer alias, percent-encoded
@@ -58,6 +59,8 @@ card_router = Router()
 BoardId = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
                               description="The board's id: a track's default board is its id, "
                                           "`<track>_cw` for clockwise runs.")]
+SeasonId = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
+                               description="The season's id.")]
 RacerAlias = Annotated[str, Path(min_length=1, max_length=MAX_PATH_PARAM_CHARS,
                                  description="The racer's alias (any case).")]
 Limit = Annotated[int, Query(ge=1, le=MAX_PAGE, description="How many entries (1..500).")]
@@ -116,6 +119,11 @@ def current_sign_in(request: Request) -> SignIn:
 def segment(value: str) -> str:
     """A path parameter as the racer typed it: API Gateway's rawPath keeps percent-encoding."""
     return unquote(value)
+
+
+def origin(event: Any) -> str:
+    """The scheme and host the client used to reach the board (https behind API Gateway)."""
+    return origin_of(event.headers or {}, (event.raw_event.get("requestContext") or {}).get("domainName"))
 
 
 # ---- request bodies: what each route takes, and its bound --------------------------------------

@@ -4,16 +4,16 @@ answers, and the ETag of a board's page."""
 from __future__ import annotations
 
 import hashlib
-from functools import cache
 from http import HTTPStatus
-from importlib.metadata import PackageNotFoundError
-from importlib.metadata import version as distribution_version
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from aws_lambda_powertools.event_handler import Response, content_types
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from drboard_assembler import __version__ as assembler_version
 from pydantic import BaseModel, ConfigDict, Field
+
+if TYPE_CHECKING:
+    from .params import RequestBody
 
 HTML = "text/html; charset=utf-8"
 #: Every page's headers; its Content-Security-Policy comes from :func:`page_answer` (the pages
@@ -24,12 +24,11 @@ PAGE_HEADERS = {
 }
 
 
-@cache  # reading the package's metadata costs a third of a pull: once per process is enough
 def api_version() -> str:
-    try:
-        return distribution_version("drboard")
-    except PackageNotFoundError:  # pragma: no cover - a Lambda bundle without dist metadata
-        return assembler_version
+    """The distribution's version, as its packages write it out (tests/unit/test_openapi.py holds
+    it equal to the installed distribution's): a Lambda bundle has no metadata to read, and
+    looking for it costs a cold start more than the rest of building the resolver."""
+    return assembler_version
 
 
 # ---- response and error models --------------------------------------------------------------
@@ -38,7 +37,7 @@ def api_version() -> str:
 class FieldProblem(BaseModel):
     """One problem with one field: ``loc`` is a path such as ``evaluations[0].laps[2].time_ms``."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
     loc: str
     msg: str
@@ -48,7 +47,7 @@ class FieldProblem(BaseModel):
 class ErrorBody(BaseModel):
     """Every error answer: the domain error's name, a message for people, and field detail."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
     error: str
     message: str
@@ -74,6 +73,24 @@ UNREADABLE = (" Or a body that cannot be read as its headers say (`UnreadableBod
 UNSIGNED = ("Not signed with SigV4 by an identity allowed to invoke the route (API Gateway's own "
             "answer, without an `error` name); on `drboard serve`, a request from another "
             "computer than the one serving (`NotAuthorized`).")
+
+
+def admin_responses(ok: OpenAPIResponse, *, ok_status: int = HTTPStatus.OK,
+                     body: RequestBody | None = None,
+                     errors: dict[int, str] | None = None,
+                     also: dict[int, OpenAPIResponse] | None = None) -> dict[int, OpenAPIResponse]:
+    """An organiser route's answers: its own, the refusal of unsigned requests, a body's (413,
+    415, 422), then its own errors and other answers (which replace the general ones)."""
+    responses: dict[int, OpenAPIResponse] = {ok_status: ok, 400: error_response(BAD_PATH),
+                                             403: error_response(UNSIGNED)}
+    if body is not None:
+        verb = "are" if body.name.endswith("s") else "is"
+        responses[400] = error_response(BAD_PATH + UNREADABLE)
+        responses[413] = error_response(f"The body is over {body.max_bytes} bytes.")
+        responses[415] = error_response("The body is not JSON.")
+        responses[422] = error_response(f"The {body.name} {verb} not valid (field-level `detail`).")
+    responses |= {status: error_response(text) for status, text in (errors or {}).items()}
+    return responses | (also or {})
 
 
 def json_answer(status: int, body: BaseModel) -> Response[Any]:

@@ -13,12 +13,20 @@ from aws_lambda_powertools.event_handler.openapi.params import Body, Path
 
 from ..errors import InvalidQuery
 from ..models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
-from ..web import board_path, season_path
-from .organisers import _ADMIN, _NO_BOARD, _admin_responses
-from .pages import _origin
-from .params import BoardId, Organiser, RequestBody, Service, admin_router, segment, takes
+from .organisers import _ADMIN, _NO_BOARD
+from .params import (
+    BoardId,
+    Organiser,
+    RequestBody,
+    SeasonId,
+    Service,
+    admin_router,
+    origin,
+    segment,
+    takes,
+)
+from .responses import admin_responses as _admin_responses
 from .responses import json_answer, json_response
-from .seasons import SeasonId
 
 WEBHOOK_BODY = RequestBody("webhook", 4096, InvalidQuery)
 WebhookId = Annotated[str, Path(min_length=1, max_length=64, description="The webhook's id.")]
@@ -84,8 +92,10 @@ def remove_webhook(board: BoardId, webhook: WebhookId, service: Service,
 )
 def test_webhook(board: BoardId, webhook: WebhookId, service: Service, organiser: Organiser,
                  request: Request) -> Delivery:
+    from ..web import board_path  # the pages' module, which the admin function never loads else
+
     board_id = segment(board)
-    url = _origin(request.resolved_event) + board_path(board_id)
+    url = origin(request.resolved_event) + board_path(board_id)
     return service.test_webhook(board_id, segment(webhook), url)
 
 
@@ -148,6 +158,8 @@ def remove_season_webhook(season: SeasonId, webhook: WebhookId, service: Service
 )
 def test_season_webhook(season: SeasonId, webhook: WebhookId, service: Service, organiser: Organiser,
                         request: Request) -> Delivery:
+    from ..web import season_path  # the pages' module, which the admin function never loads else
+
     season_id = segment(season)
-    url = _origin(request.resolved_event) + season_path(season_id)
+    url = origin(request.resolved_event) + season_path(season_id)
     return service.test_webhook(season_id, segment(webhook), url, kind="season")

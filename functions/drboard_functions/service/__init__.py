@@ -10,16 +10,19 @@ organisers' hand on racers' aliases), ``results`` (laps to analyse), ``webhooks`
 announcements), ``seasons`` (boards added up into a season's standings, and its final) and
 ``sharing`` (result cards); ``copies`` holds the rules of copied runs.
 :class:`LeaderboardService` only hands each call to the room that answers it.
+
+A room's module loads, and the room is built, when the service first hands it a call: the pull
+function never imports the pushing, transfer or webhooks rooms (nor what they import), and the
+push function no organiser's room. The names this package exports load their module likewise.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Concatenate, ParamSpec, TypeVar
+from functools import cached_property
+from importlib import import_module
+from typing import TYPE_CHECKING, Any, Concatenate, ParamSpec, TypeVar
 
-from ..models.notices import EntryChange
-from ..stores.base import BoardStore, RecordArchive
-from .aliases import Aliases
 from .boards import (
     CUSTOM_PREFIX,
     BoardKeeper,
@@ -30,17 +33,22 @@ from .boards import (
     racer_key,
     utc_now,
 )
-from .copies import evaluation_fingerprints
-from .managing import Managing
-from .moderating import Moderating
-from .paging import DEFAULT_PAGE
-from .pushing import Pushing, check_record_size, scored_write
-from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
-from .results import LAPS_PAGE, Results
-from .seasons import Seasons
-from .sharing import Sharing
-from .transfer import Transfer
-from .webhooks import Webhooks
+
+if TYPE_CHECKING:
+    from ..models.notices import EntryChange
+    from ..stores.base import BoardStore, RecordArchive
+    from .aliases import Aliases
+    from .copies import evaluation_fingerprints
+    from .managing import Managing
+    from .moderating import Moderating
+    from .paging import DEFAULT_PAGE
+    from .pushing import Pushing, check_record_size, scored_write
+    from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+    from .results import LAPS_PAGE, Results
+    from .seasons import Seasons
+    from .sharing import Sharing
+    from .transfer import Transfer
+    from .webhooks import Webhooks
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -50,6 +58,48 @@ __all__ = [
     "LeaderboardService", "board_for_track", "check_record_size", "default_board_id",
     "evaluation_fingerprints", "is_default_board_id", "racer_key", "scored_write", "utc_now",
 ]
+
+#: The module each name exported from a room's module comes from (loaded on first use).
+_HOMES = {"DEFAULT_PAGE": "paging", "DEFAULT_TOP": "reading", "MAX_COMPARED": "reading",
+          "MAX_TOP": "reading", "LAPS_PAGE": "results", "check_record_size": "pushing",
+          "scored_write": "pushing", "evaluation_fingerprints": "copies"}
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(f"{__name__}.{home}"), name)
+
+
+class _Unloaded:
+    """A room's class whose module is not loaded yet. ``Pushing.push`` stands for the method a
+    façade method hands its calls to (by name, see :func:`_handed_to`); ``Pushing(keeper)``
+    loads the module and builds the room."""
+
+    def __init__(self, module: str, name: str) -> None:
+        self.module = module
+        self.__name__ = name
+        self.__doc__ = None  # a method's own, once its module is loaded
+
+    def __getattr__(self, method: str) -> _Unloaded:
+        return _Unloaded(self.module, method)
+
+    def __call__(self, *args: Any) -> Any:
+        return getattr(import_module(f"{__name__}.{self.module}"), self.__name__)(*args)
+
+
+if not TYPE_CHECKING:  # each room's class stands for its module until the service first uses the room
+    Aliases = _Unloaded("aliases", "Aliases")
+    Managing = _Unloaded("managing", "Managing")
+    Moderating = _Unloaded("moderating", "Moderating")
+    Pushing = _Unloaded("pushing", "Pushing")
+    Reading = _Unloaded("reading", "Reading")
+    Results = _Unloaded("results", "Results")
+    Seasons = _Unloaded("seasons", "Seasons")
+    Sharing = _Unloaded("sharing", "Sharing")
+    Transfer = _Unloaded("transfer", "Transfer")
+    Webhooks = _Unloaded("webhooks", "Webhooks")
 
 
 def _handed_to(room: str, method: Callable[Concatenate[Any, P], R]) -> Callable[Concatenate[Any, P], R]:
@@ -73,18 +123,49 @@ class LeaderboardService:
         self.store = store
         self.clock = clock
         self.archive = archive
-        keeper = BoardKeeper(store, clock)
-        self._pushing = Pushing(keeper, archive)
-        self._reading = Reading(keeper)
-        self._managing = Managing(keeper)
-        self._moderating = Moderating(keeper)
-        self._transfer = Transfer(keeper, archive)
-        self._seasons = Seasons(keeper)
-        self._aliases = Aliases(keeper)
-        self._results = Results(keeper)
-        self._webhooks = Webhooks(keeper)
-        self._sharing = Sharing(self._reading, self._seasons, clock)
-        self._keeper = keeper
+        self._keeper = BoardKeeper(store, clock)
+
+    # The rooms, each built on its first call.
+
+    @cached_property
+    def _pushing(self) -> Pushing:
+        return Pushing(self._keeper, self.archive)
+
+    @cached_property
+    def _reading(self) -> Reading:
+        return Reading(self._keeper)
+
+    @cached_property
+    def _managing(self) -> Managing:
+        return Managing(self._keeper)
+
+    @cached_property
+    def _moderating(self) -> Moderating:
+        return Moderating(self._keeper)
+
+    @cached_property
+    def _transfer(self) -> Transfer:
+        return Transfer(self._keeper, self.archive)
+
+    @cached_property
+    def _seasons(self) -> Seasons:
+        return Seasons(self._keeper)
+
+    @cached_property
+    def _aliases(self) -> Aliases:
+        return Aliases(self._keeper)
+
+    @cached_property
+    def _results(self) -> Results:
+        return Results(self._keeper)
+
+    @cached_property
+    def _webhooks(self) -> Webhooks:
+        return Webhooks(self._keeper)
+
+    @cached_property
+    def _sharing(self) -> Sharing:
+        return Sharing(self._reading, self._seasons, self.clock)
 
     push = _handed_to("_pushing", Pushing.push)
     me = _handed_to("_pushing", Pushing.me)

@@ -7,7 +7,7 @@ import re
 import secrets
 from collections.abc import Callable
 from datetime import UTC, datetime
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from drboard_assembler.aliases import alias_key
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
@@ -20,11 +20,13 @@ from ..conditions import meets, unmet
 from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
 from ..identity import Caller
 from ..models.domain import AuditAction, AuditEvent, Board, BoardRules, BoardStatus, Entry, run_mismatches
-from ..models.notices import EntryChange
-from ..models.requests import BoardSpec
 from ..models.views import BoardView
 from ..stores.base import BoardHasEntries, BoardStore, StoredBoard
 from ..views import board_view
+
+if TYPE_CHECKING:
+    from ..models.notices import EntryChange
+    from ..models.requests import BoardSpec
 
 Clock = Callable[[], datetime]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from datetime import datetime
-from typing import NamedTuple, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 from drboard_assembler.record import Record
 
@@ -23,8 +23,10 @@ from ..models.domain import (
     SubmissionLimits,
     WriteOutcome,
 )
-from ..models.notices import MAX_ERROR_CHARS, Webhook
-from ..models.seasons import RoundResults, Season, SeasonLink
+
+if TYPE_CHECKING:  # the chat's webhooks and the seasons load with the stores' code that reads them
+    from ..models.notices import Webhook
+    from ..models.seasons import RoundResults, Season, SeasonLink
 
 
 class StoredBoard(NamedTuple):
@@ -113,6 +115,13 @@ def stored_record(raw: str | bytes) -> Record:
     its content hash — see ``drboard_assembler.record.stored``), so a tightened rule never
     breaks a read; `drboard board recheck` flags the records it would refuse."""
     return Record.model_validate_json(raw, context={"stored": True})
+
+
+def stored_webhook(raw: str | bytes) -> Webhook:
+    """A webhook read back from the board's own store."""
+    from ..models.notices import Webhook
+
+    return Webhook.model_validate_json(raw)
 
 
 class BadPageToken(ValueError):
@@ -255,6 +264,8 @@ def claimable(state: str, lease_until: str, now: datetime) -> bool:
 def delivered(webhook: Webhook, at: datetime, error: str | None) -> Webhook:
     """The webhook with its last delivery noted: sent at ``at`` (its last error cleared), or
     failed at ``at`` with ``error``."""
+    from ..models.notices import MAX_ERROR_CHARS
+
     if error is None:
         return webhook.model_copy(update={"last_sent_at": at, "last_error": None, "last_error_at": None})
     return webhook.model_copy(update={"last_error": error[:MAX_ERROR_CHARS], "last_error_at": at})

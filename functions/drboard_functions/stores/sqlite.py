@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime, timedelta
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from drboard_assembler.record import Record
 
@@ -37,7 +37,6 @@ from ..models.domain import (
     WriteOutcome,
     with_flag,
 )
-from ..models.notices import Webhook
 from . import rank_buckets
 from .base import (
     AliasConflict,
@@ -64,8 +63,12 @@ from .base import (
     page_token,
     read_page_token,
     stored_record,
+    stored_webhook,
 )
 from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
+
+if TYPE_CHECKING:
+    from ..models.notices import Webhook
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
@@ -819,12 +822,12 @@ class SqliteStore(SqliteSeasons):
 
     def webhooks(self, target_key: str) -> list[Webhook]:
         rows = self._db.execute("SELECT webhook FROM webhooks WHERE target = ?", (target_key,))
-        return sorted((Webhook.model_validate_json(row[0]) for row in rows),
+        return sorted((stored_webhook(row[0]) for row in rows),
                       key=lambda w: (w.created_at, w.webhook_id))
 
     def all_webhooks(self) -> list[Webhook]:
         rows = self._db.execute("SELECT webhook FROM webhooks ORDER BY target, webhook_id")
-        return [Webhook.model_validate_json(row[0]) for row in rows]
+        return [stored_webhook(row[0]) for row in rows]
 
     def delete_webhook(self, target_key: str, webhook_id: str) -> Webhook | None:
         with self._write() as db:
@@ -832,7 +835,7 @@ class SqliteStore(SqliteSeasons):
                              (target_key, webhook_id)).fetchone()
             db.execute("DELETE FROM webhooks WHERE target = ? AND webhook_id = ?",
                        (target_key, webhook_id))
-        return Webhook.model_validate_json(row[0]) if row else None
+        return stored_webhook(row[0]) if row else None
 
     def note_delivery(self, target_key: str, webhook_id: str, at: datetime,
                       error: str | None) -> None:
@@ -841,7 +844,7 @@ class SqliteStore(SqliteSeasons):
                              (target_key, webhook_id)).fetchone()
             if row is None:
                 return
-            webhook = delivered(Webhook.model_validate_json(row[0]), at, error)
+            webhook = delivered(stored_webhook(row[0]), at, error)
             db.execute("UPDATE webhooks SET webhook = ? WHERE target = ? AND webhook_id = ?",
                        (webhook.model_dump_json(), target_key, webhook_id))
 

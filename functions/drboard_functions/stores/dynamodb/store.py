@@ -33,7 +33,6 @@ from ...models.domain import (
     WriteOutcome,
     with_flag,
 )
-from ...models.notices import Webhook
 from ..aws_errors import cancellation_codes, code_of, translating
 from ..base import (
     AliasConflict,
@@ -54,6 +53,7 @@ from ..base import (
     page_token,
     read_page_token,
     stored_record,
+    stored_webhook,
 )
 from .bulk import BulkWrite
 from .codecs import (
@@ -112,6 +112,7 @@ if TYPE_CHECKING:
         TransactWriteItemTypeDef,
     )
 
+    from ...models.notices import Webhook
     from .codecs import Item
 
 BATCH_GET_KEYS = 100
@@ -527,7 +528,7 @@ class DynamoDbStore(DynamoDbSeasons):
             "KeyConditionExpression": "board = :partition AND begins_with(sk, :prefix)",
             "ExpressionAttributeValues": {":partition": text(WEBHOOK_PARTITION),
                                           ":prefix": text(target_key + "#")}})
-        found = [Webhook.model_validate_json(item["data"]["S"]) for item in items]
+        found = [stored_webhook(item["data"]["S"]) for item in items]
         return sorted((w for w in found if w.target.key == target_key),
                       key=lambda w: (w.created_at, w.webhook_id))
 
@@ -536,20 +537,20 @@ class DynamoDbStore(DynamoDbSeasons):
             "TableName": self.table, "ConsistentRead": True,
             "KeyConditionExpression": "board = :partition",
             "ExpressionAttributeValues": {":partition": text(WEBHOOK_PARTITION)}})
-        return [Webhook.model_validate_json(item["data"]["S"]) for item in items]
+        return [stored_webhook(item["data"]["S"]) for item in items]
 
     def delete_webhook(self, target_key: str, webhook_id: str) -> Webhook | None:
         answer = self.client.delete_item(TableName=self.table, ReturnValues="ALL_OLD",
                                          Key=key(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}"))
         old = answer.get("Attributes")
-        return Webhook.model_validate_json(old["data"]["S"]) if old else None
+        return stored_webhook(old["data"]["S"]) if old else None
 
     def note_delivery(self, target_key: str, webhook_id: str, at: datetime,
                       error: str | None) -> None:
         item = self.get_item(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}")
         if item is None:
             return
-        webhook = delivered(Webhook.model_validate_json(item["data"]["S"]), at, error)
+        webhook = delivered(stored_webhook(item["data"]["S"]), at, error)
         try:
             self.client.put_item(TableName=self.table, ConditionExpression="attribute_exists(sk)",
                                  Item={**key(WEBHOOK_PARTITION, f"{target_key}#{webhook_id}"),

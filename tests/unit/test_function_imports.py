@@ -1,0 +1,145 @@
+"""Each Lambda function imports only what its routes use, so its cold start pays for nothing else.
+
+bench/bench_functions.py measures the cold starts; these tests check what a fresh process of each
+handler has imported: after the import, and for the pull function after its first request too.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from drboard_assembler.record import Record
+from drboard_functions.services import sqlite_service
+
+EVENTS = Path(__file__).parents[2] / "events"
+
+#: What no function imports: the X-Ray SDK (traces are Lambda's own).
+NOWHERE = ("aws_xray_sdk",)
+#: Besides NOWHERE, what each handler's import must leave alone.
+NOT_IMPORTED = {
+    "pull": ("drboard_functions.routes.submissions", "drboard_functions.routes.organisers",
+             "drboard_functions.routes.season_changes",
+             "drboard_functions.routes.webhooks", "drboard_functions.service.pushing",
+             "drboard_functions.service.transfer", "drboard_functions.service.managing",
+             "drboard_functions.service.moderating", "drboard_functions.service.aliases",
+             "drboard_functions.service.webhooks", "drboard_functions.models.transfer",
+             "drboard_functions.models.requests", "drboard_functions.models.notices",
+             "drboard_functions.notify", "drboard_functions.charts", "regex", "disarm", "jinja2"),
+    "push": ("drboard_functions.routes.boards", "drboard_functions.routes.pages",
+             "drboard_functions.routes.results", "drboard_functions.routes.organisers",
+             "drboard_functions.routes.webhooks", "drboard_functions.web",
+             "drboard_functions.service.transfer", "drboard_functions.service.managing",
+             "drboard_functions.service.moderating", "drboard_functions.service.webhooks",
+             "drboard_functions.models.transfer",
+             "drboard_functions.notify", "jinja2"),
+    "admin": ("drboard_functions.routes.boards", "drboard_functions.routes.pages",
+              "drboard_functions.routes.seasons", "drboard_functions.season_page",
+              "drboard_functions.routes.results", "drboard_functions.routes.submissions",
+              "drboard_functions.web", "jinja2"),
+}
+
+LAMBDA_ENVIRONMENT = {"POWERTOOLS_SERVICE_NAME": "drboard", "POWERTOOLS_METRICS_NAMESPACE": "drboard",
+                      "AWS_LAMBDA_FUNCTION_NAME": "drboard-test", "TABLE_NAME": "unused"}
+
+#: What the Makefile leaves out of each function's bundle (NOT_SHIPPED_<Function>).
+NOT_SHIPPED = {"pull": ["regex", "disarm"], "push": ["jinja2", "markupsafe", "segno"],
+               "admin": ["jinja2", "markupsafe", "segno"]}
+
+#: Run in a fresh process: import the handler, answer events on an SQLite board (the wiring
+#: swapped as in test_handlers) with some libraries missing, and tell the modules loaded, the
+#: answers' statuses and whether the Record's schema was built.
+PROBE = """
+import json, sys
+from importlib.abc import MetaPathFinder
+from pathlib import Path
+kind, db, missing, events = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4:]
+
+class Missing(MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in missing:
+            raise ModuleNotFoundError(f"No module named {name!r} (not in the bundle)", name=name)
+        return None
+
+sys.meta_path.insert(0, Missing())
+handler = __import__("drboard_functions.handlers." + kind, fromlist=["lambda_handler"])
+imported = sorted(sys.modules)
+from drboard_functions.handlers import wiring
+from drboard_functions.services import sqlite_service
+wiring.service_from_environment = lambda: sqlite_service(Path(db))
+class Context:
+    function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
+    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
+    aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
+answered = {Path(event).name: handler.lambda_handler(json.loads(Path(event).read_text()),
+                                                    Context())["statusCode"] for event in events}
+from drboard_assembler.record import Record
+print(json.dumps({"imported": imported, "answered": answered, "loaded": sorted(sys.modules),
+                  "record_schema_built": Record.__pydantic_complete__}))
+"""
+
+
+def probe(kind: str, db: Path | None = None, *events: str,
+          missing: tuple[str, ...] = ()) -> dict[str, object]:
+    arguments = [kind, str(db or ""), " ".join(missing), *(str(EVENTS / event) for event in events)]
+    done = subprocess.run([sys.executable, "-c", PROBE, *arguments], capture_output=True, text=True,
+                          check=False, env={**os.environ, **LAMBDA_ENVIRONMENT})
+    assert done.returncode == 0, done.stderr
+    found: dict[str, object] = json.loads(done.stdout.splitlines()[-1])
+    return found
+
+
+def among(modules: object, prefixes: tuple[str, ...]) -> list[str]:
+    assert isinstance(modules, list)
+    return [m for m in modules if m.startswith(prefixes)]
+
+
+@pytest.mark.parametrize("kind", sorted(NOT_IMPORTED))
+def test_a_handler_imports_only_its_own_routes_and_rooms(kind: str) -> None:
+    found = probe(kind)
+    assert among(found["imported"], NOT_IMPORTED[kind] + NOWHERE) == []
+
+
+def event_record() -> Record:
+    return Record.model_validate_json(json.loads((EVENTS / "push.json").read_text())["body"])
+
+
+@pytest.fixture
+def board_with_a_push(tmp_path: Path) -> Path:
+    db = tmp_path / "board.db"
+    sqlite_service(db).push(event_record())
+    return db
+
+
+def test_the_pull_function_answers_the_standings_without_the_record_schema(board_with_a_push: Path) -> None:
+    """The standings hold entries, not records: the pull's first request builds no Record schema
+    and loads no push, organiser or webhook code."""
+    found = probe("pull", board_with_a_push, "pull_board.json")
+    assert found["answered"] == {"pull_board.json": 200}
+    assert among(found["loaded"], NOT_IMPORTED["pull"] + NOWHERE) == []
+    assert found["record_schema_built"] is False
+
+
+#: Each function's events that need only a board holding the example push (test_handlers runs
+#: the others, in order).
+EVENTS_OF = {"pull": sorted(p.name for p in EVENTS.glob("pull_*.json")), "push": ["push.json"],
+             "admin": ["admin_create_board.json", "admin_import_submission.json", "admin_audit.json",
+                       "admin_export_board.json"]}
+
+
+@pytest.mark.parametrize("kind", sorted(NOT_SHIPPED))
+def test_a_function_answers_without_what_its_bundle_leaves_out(kind: str, tmp_path: Path) -> None:
+    """The Makefile leaves the name checks' libraries out of the pull function and the pages'
+    out of the others: each function's events are answered as well without them."""
+    db = tmp_path / "board.db"
+    if kind != "push":
+        sqlite_service(db).push(event_record())
+    found = probe(kind, db, *EVENTS_OF[kind], missing=tuple(NOT_SHIPPED[kind]))
+    answered = found["answered"]
+    assert isinstance(answered, dict)
+    assert all(status < 500 for status in answered.values()), answered
+    assert among(found["loaded"], tuple(NOT_SHIPPED[kind])) == []
