@@ -201,7 +201,7 @@ def board_spec(options: Mapping[str, Any]) -> BoardSpec:
     opens_at, closes_at = fields.get("opens_at"), fields.get("closes_at")
     if opens_at and closes_at and closes_at <= opens_at:
         raise click.BadParameter("must be after --opens-at", param_hint="'--closes-at'")
-    return _validated(BoardSpec, fields)
+    return validated(BoardSpec, fields)
 
 
 def board_changes(options: Mapping[str, Any]) -> BoardChanges:
@@ -219,10 +219,13 @@ def board_changes(options: Mapping[str, Any]) -> BoardChanges:
         fields[field] = value
     if not fields:
         raise click.UsageError("give at least one option to change; see `drboard board update --help`")
-    return _validated(BoardChanges, fields)
+    return validated(BoardChanges, fields)
 
 
-def _validated(model: type[M], fields: dict[str, Any]) -> M:
+def validated(model: type[M], fields: dict[str, Any],
+              options: Mapping[str, str] = OPTION_OF_FIELD) -> M:
+    """The model the options make, or one message naming the option (``options``: the option
+    each field comes from) that is wrong."""
     from pydantic import ValidationError
 
     try:
@@ -231,6 +234,7 @@ def _validated(model: type[M], fields: dict[str, Any]) -> M:
         problem = error.errors()[0]
         field = str(problem["loc"][0]) if problem["loc"] else ""
         message = problem["msg"].removeprefix("Value error, ")
-        if problem["type"] == "string_pattern_mismatch" and field == "board_id":
-            message = f"{fields[field]!r} is not a board id: {BOARD_ID_RULE}"
-        raise click.BadParameter(message, param_hint=f"'{OPTION_OF_FIELD.get(field, field)}'") from None
+        if problem["type"] == "string_pattern_mismatch":
+            what = "a board id" if field == "board_id" else "an id"
+            message = f"{problem['input']!r} is not {what}: {BOARD_ID_RULE}"
+        raise click.BadParameter(message, param_hint=f"'{options.get(field, field)}'") from None

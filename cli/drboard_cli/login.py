@@ -131,40 +131,54 @@ class _CallbackServer(HTTPServer):
     received: str | None = None
 
 
+class _HostedSignIn:
+    """One sign-in on the board's hosted page (authorization code with PKCE): its address, and
+    the exchange of the code the page sends back for the racer's token."""
+
+    def __init__(self, endpoint: str, settings: SignIn) -> None:
+        from authlib.integrations.requests_client import OAuth2Session
+
+        settings = require_cognito(settings, endpoint)
+        if not settings.domain:
+            raise NotAuthorized(f"{endpoint} has no sign-in page: use `drboard login --password`")
+        self.endpoint, self.settings = endpoint, settings
+        self.session = OAuth2Session(settings.client_id, scope=" ".join(settings.scopes or ["openid"]),
+                                     redirect_uri=REDIRECT_URI, code_challenge_method="S256")
+        self.verifier = secrets.token_urlsafe(64)
+        self.url, self.state = self.session.create_authorization_url(
+            f"{settings.domain}/oauth2/authorize", code_verifier=self.verifier)
+
+    def finish(self, received: str) -> tokens.SavedToken:
+        """The token the page's answer (the address it sent the browser back to) is worth."""
+        answer = self.session.fetch_token(f"{self.settings.domain}/oauth2/token",
+                                          authorization_response=received,
+                                          code_verifier=self.verifier, state=self.state)
+        return _saved(self.endpoint, self.settings, {"AccessToken": answer["access_token"],
+                                                     "RefreshToken": answer.get("refresh_token"),
+                                                     "ExpiresIn": answer.get("expires_in", 3600)})
+
+
 def login_in_browser(endpoint: str, settings: SignIn, show: Callable[[str], None],
                      open_browser: bool = True, wait_s: float = BROWSER_WAIT_S) -> tokens.SavedToken:
     """Open the hosted sign-in page (or print its address) and wait for its redirect."""
-    from authlib.integrations.requests_client import OAuth2Session
-
-    settings = require_cognito(settings, endpoint)
-    if not settings.domain:
-        raise NotAuthorized(f"{endpoint} has no sign-in page: use `drboard login --password`")
-    session = OAuth2Session(settings.client_id, scope=" ".join(settings.scopes or ["openid"]),
-                            redirect_uri=REDIRECT_URI, code_challenge_method="S256")
-    verifier = secrets.token_urlsafe(64)
-    url, state = session.create_authorization_url(f"{settings.domain}/oauth2/authorize",
-                                                  code_verifier=verifier)
+    sign_in = _HostedSignIn(endpoint, settings)
     server = _CallbackServer(("127.0.0.1", CALLBACK_PORT), _Callback)
     server.timeout = 1
     try:
-        show(url)
+        show(sign_in.url)
         if open_browser:
             import webbrowser
 
-            webbrowser.open(url)
+            webbrowser.open(sign_in.url)
         received = _wait_for_redirect(server, wait_s)
     finally:
         server.server_close()
     query = parse_qs(urlsplit(received).query)
-    if query.get("state", [""])[0] != state:
+    if query.get("state", [""])[0] != sign_in.state:
         raise NotAuthorized("the sign-in page answered another sign-in (state differs): try again")
     if "error" in query:
         raise NotAuthorized(f"sign-in refused: {query.get('error_description', query['error'])[0]}")
-    answer = session.fetch_token(f"{settings.domain}/oauth2/token", authorization_response=received,
-                                 code_verifier=verifier, state=state)
-    return _saved(endpoint, settings, {"AccessToken": answer["access_token"],
-                                       "RefreshToken": answer.get("refresh_token"),
-                                       "ExpiresIn": answer.get("expires_in", 3600)})
+    return sign_in.finish(received)
 
 
 def login_with_pasted_code(endpoint: str, settings: SignIn, show: Callable[[str], None],
@@ -174,23 +188,9 @@ def login_with_pasted_code(endpoint: str, settings: SignIn, show: Callable[[str]
     (``http://localhost:8765/callback?code=…&state=…``, which fails to load on another device,
     but its address bar holds the code), or the code alone. PKCE binds the code to this
     machine's verifier, so a code pasted alone is as safe as the redirect."""
-    from authlib.integrations.requests_client import OAuth2Session
-
-    settings = require_cognito(settings, endpoint)
-    if not settings.domain:
-        raise NotAuthorized(f"{endpoint} has no sign-in page: use `drboard login --password`")
-    session = OAuth2Session(settings.client_id, scope=" ".join(settings.scopes or ["openid"]),
-                            redirect_uri=REDIRECT_URI, code_challenge_method="S256")
-    verifier = secrets.token_urlsafe(64)
-    url, state = session.create_authorization_url(f"{settings.domain}/oauth2/authorize",
-                                                  code_verifier=verifier)
-    show(url)
-    received = pasted_redirect(ask(), state)
-    answer = session.fetch_token(f"{settings.domain}/oauth2/token", authorization_response=received,
-                                 code_verifier=verifier, state=state)
-    return _saved(endpoint, settings, {"AccessToken": answer["access_token"],
-                                       "RefreshToken": answer.get("refresh_token"),
-                                       "ExpiresIn": answer.get("expires_in", 3600)})
+    sign_in = _HostedSignIn(endpoint, settings)
+    show(sign_in.url)
+    return sign_in.finish(pasted_redirect(ask(), sign_in.state))
 
 
 def pasted_redirect(pasted: str, state: str) -> str:

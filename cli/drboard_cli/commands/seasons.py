@@ -79,7 +79,7 @@ def season_create(ctx: Context, /, season_id: str, title: str, description: str 
     if best_of is not None:
         fields["best_of"] = best_of
     with edge():
-        spec = _validated(SeasonSpec, fields)
+        spec = board_options.validated(SeasonSpec, fields, _OPTION_OF_FIELD)
         _print_season(ctx.board.create_season(spec))
 
 
@@ -106,7 +106,8 @@ def season_update(ctx: Context, /, season_id: str, title: str | None, descriptio
         if not fields:
             raise click.UsageError("give at least one option to change; see "
                                    "`drboard season update --help`")
-        _print_season(ctx.board.update_season(season_id, _validated(SeasonChanges, fields)))
+        changes = board_options.validated(SeasonChanges, fields, _OPTION_OF_FIELD)
+        _print_season(ctx.board.update_season(season_id, changes))
 
 
 @season_group.command(name="add-round")
@@ -127,7 +128,8 @@ def season_add_round(ctx: Context, season_id: str, board_id: str, weight: float,
     from drboard_functions.models.seasons import RoundSpec
 
     with edge():
-        spec = _validated(RoundSpec, {"weight": weight, "always_counts": always_counts})
+        spec = board_options.validated(RoundSpec, {"weight": weight, "always_counts": always_counts},
+                                       _OPTION_OF_FIELD)
         _print_season(ctx.board.add_round(season_id, board_id, spec))
 
 
@@ -159,7 +161,8 @@ def season_final(ctx: Context, season_id: str, board_id: str, top: int, from_rou
     from drboard_functions.models.seasons import FinalSpec
 
     with edge():
-        spec = _validated(FinalSpec, {"board_id": board_id, "top": top, "from_round": from_round})
+        final = {"board_id": board_id, "top": top, "from_round": from_round}
+        spec = board_options.validated(FinalSpec, final, _OPTION_OF_FIELD)
         _print_season(ctx.board.set_final(season_id, spec))
 
 
@@ -331,21 +334,6 @@ def _positions(text: str) -> list[int]:
 _OPTION_OF_FIELD = {"season_id": "ID", "title": "--title", "description": "--description",
                     "points": "--points", "best_of": "--best-of", "weight": "--weight",
                     "top": "--top", "from_round": "--from-round", "board_id": "BOARD"}
-
-
-def _validated(model: type[Any], fields: dict[str, Any]) -> Any:
-    from pydantic import ValidationError
-
-    try:
-        return model.model_validate(fields)
-    except ValidationError as error:
-        problem = error.errors()[0]
-        field = str(problem["loc"][0]) if problem["loc"] else ""
-        message = problem["msg"].removeprefix("Value error, ")
-        if problem["type"] == "string_pattern_mismatch":
-            message = f"{problem['input']!r} is not an id: {board_options.BOARD_ID_RULE}"
-        hint = _OPTION_OF_FIELD.get(field, "--points" if field == "points" else field)
-        raise click.BadParameter(message, param_hint=f"'{hint}'") from None
 
 
 def _add_webhook_commands() -> None:

@@ -17,8 +17,8 @@ bumped (its page shows the link), and the results of rounds it no longer has del
 from __future__ import annotations
 
 import zlib
-from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from collections.abc import Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from botocore.exceptions import ClientError
 
@@ -26,12 +26,11 @@ from ...models.seasons import RoundResults, Season, SeasonLink
 from ..aws_errors import code_of, translating
 from ..base import SeasonConflict, SeasonSlice, StoredBoard, page_token, read_page_token
 from .codecs import BOARD_SK, BOARDS_INDEX, key, stored_board, text
-from .retries import backoff
 from .transaction import Slots
 
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.client import DynamoDBClient
-    from mypy_boto3_dynamodb.type_defs import PutTypeDef, QueryInputTypeDef
+    from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef, PutTypeDef, QueryInputTypeDef
 
     from .codecs import Item
 
@@ -39,7 +38,6 @@ SEASON_KIND = "season"
 SEASON_SK = "#SEASON"
 LINK_PREFIX = "#SEASON#"
 RESULTS_PREFIX = "R#"
-BATCH_GET_KEYS = 100
 #: A round's results bigger than this, compressed, are not kept (an item holds 400 KB): a field
 #: of thousands of the longest aliases in scripts that do not compress. Its views read it again.
 MAX_KEPT_RESULTS_BYTES = 350_000
@@ -85,6 +83,8 @@ class DynamoDbSeasons:
         def _query(self, request: QueryInputTypeDef, limit: int | None = None) -> list[Item]: ...
 
         def _page(self, request: QueryInputTypeDef, limit: int) -> tuple[list[Item], bool]: ...
+
+        def _batch_get(self, keys: Sequence[dict[str, AttributeValueTypeDef]]) -> Iterator[Item]: ...
 
     def get_season(self, season_id: str) -> Season | None:
         item = self.get_item(season_partition(season_id), SEASON_SK)
@@ -148,22 +148,9 @@ class DynamoDbSeasons:
         return [SeasonLink.model_validate_json(item["data"]["S"]) for item in items]
 
     def boards_by_id(self, board_ids: Sequence[str]) -> dict[str, StoredBoard]:
-        found: dict[str, StoredBoard] = {}
         keys = [key(board_id, BOARD_SK) for board_id in dict.fromkeys(board_ids)]
-        for start in range(0, len(keys), BATCH_GET_KEYS):
-            pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
-                                         "ConsistentRead": True}}
-            attempt = 0
-            while pending:
-                if attempt:
-                    backoff(attempt)
-                answer = self.client.batch_get_item(RequestItems=pending)
-                for item in answer["Responses"].get(self.table, []):
-                    stored = stored_board(item)
-                    found[stored.board.board_id] = stored
-                pending = answer.get("UnprocessedKeys") or None
-                attempt += 1
-        return found
+        boards = (stored_board(item) for item in self._batch_get(keys))
+        return {stored.board.board_id: stored for stored in boards}
 
     def round_results(self, season_id: str) -> dict[str, RoundResults]:
         items = self._query({

@@ -649,22 +649,9 @@ class DynamoDbStore(DynamoDbSeasons):
 
     def _records(self, board_id: str, submission_ids: list[str]) -> dict[str, bytes]:
         """The records' JSON, as stored, by submission id."""
-        records: dict[str, bytes] = {}
-        keys = [{"board": text(board_id), "sk": text(record_sk(i))} for i in dict.fromkeys(submission_ids)]
-        for start in range(0, len(keys), BATCH_GET_KEYS):
-            pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
-                                         "ConsistentRead": True}}
-            attempt = 0
-            while pending:
-                if attempt:
-                    backoff(attempt)
-                answer = self.client.batch_get_item(RequestItems=pending)
-                for item in answer["Responses"].get(self.table, []):
-                    submission_id = item["sk"]["S"].removeprefix(record_sk(""))
-                    records[submission_id] = record_json(item)
-                pending = answer.get("UnprocessedKeys") or None
-                attempt += 1
-        return records
+        keys = [key(board_id, record_sk(i)) for i in dict.fromkeys(submission_ids)]
+        return {item["sk"]["S"].removeprefix(record_sk("")): record_json(item)
+                for item in self._batch_get(keys)}
 
     def front_page(self, board_id: str, limit: int) -> tuple[StoredBoard | None, list[Entry]]:
         request: QueryInputTypeDef = {
@@ -755,10 +742,13 @@ class DynamoDbStore(DynamoDbSeasons):
     # ---- plumbing -------------------------------------------------------------------------
 
     def get_items(self, board_id: str, sks: Sequence[str]) -> dict[str, Item]:
-        """The board's items with these sort keys (those there), by sort key, read consistently
-        a hundred at a time."""
-        found: dict[str, Item] = {}
-        keys = [key(board_id, sk) for sk in dict.fromkeys(sks)]
+        """The board's items with these sort keys (those there), by sort key, read consistently."""
+        return {item["sk"]["S"]: item
+                for item in self._batch_get([key(board_id, sk) for sk in dict.fromkeys(sks)])}
+
+    def _batch_get(self, keys: Sequence[dict[str, AttributeValueTypeDef]]) -> Iterator[Item]:
+        """The items with these keys (those there), read consistently a hundred at a time, the
+        keys DynamoDB leaves unprocessed asked again after a pause."""
         for start in range(0, len(keys), BATCH_GET_KEYS):
             pending: Any = {self.table: {"Keys": keys[start:start + BATCH_GET_KEYS],
                                          "ConsistentRead": True}}
@@ -767,11 +757,9 @@ class DynamoDbStore(DynamoDbSeasons):
                 if attempt:
                     backoff(attempt)
                 answer = self.client.batch_get_item(RequestItems=pending)
-                for item in answer["Responses"].get(self.table, []):
-                    found[item["sk"]["S"]] = item
+                yield from answer["Responses"].get(self.table, [])
                 pending = answer.get("UnprocessedKeys") or None
                 attempt += 1
-        return found
 
     def get_item(self, board_id: str, sk: str) -> Item | None:
         response = self.client.get_item(TableName=self.table, ConsistentRead=True,
