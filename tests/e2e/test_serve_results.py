@@ -23,11 +23,11 @@ def test_export_laps_over_http_follows_every_page(server: BoardServer,
         server.service.push(make_record(f"Racer{n}", [(10000 + n, 100), (12000, 60)]))
     monkeypatch.setattr(results_room, "LAPS_PAGE", 2)  # three pages
     host, port = server.server_address
-    out = io.StringIO()
+    out = io.BytesIO()
 
     rows = write_laps(HttpBoard(f"http://{host}:{port}"), TRACK, out)
 
-    text = out.getvalue()
+    text = out.getvalue().decode()
     assert rows == 10 and text.count("board_id,racer,") == 1, "one header row for the whole file"
     read = list(csv.DictReader(io.StringIO(text)))
     assert sorted({r["racer"] for r in read}) == [f"Racer{n}" for n in range(5)]
