@@ -146,9 +146,9 @@ def test_discord_slack_and_json_hear_a_new_leader_with_racer_model_time_gap_and_
                          "(new at #1). <https://board.example/boards/club-night/view|Club night>")
     assert j["event"] == "new-leader" and j["announcement"]["racer"] == "Ada"
     assert j["announcement"]["time_ms"] == 8900 and j["announcement"]["rank"] == 1
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    (SHOTS / "discord-received.json").write_bytes(discord.raw[-1])
-    (SHOTS / "slack-received.json").write_bytes(slack.raw[-1])
+    # The README shows these bodies, exactly as the chat services receive them.
+    assert discord.raw[-1] == (SHOTS / "discord-received.json").read_bytes()
+    assert slack.raw[-1] == (SHOTS / "slack-received.json").read_bytes()
 
 
 def test_each_event_says_what_happened(service: LeaderboardService, chats: list[FakeChat]) -> None:
