@@ -97,6 +97,8 @@ def lambda_environment(function: str, table: str, task_root: Path) -> dict[str, 
             return names[raw["Ref"]]
         if isinstance(raw, dict) and set(raw) == {"Fn::Sub"}:
             return re.sub(r"\$\{([^}]+)\}", lambda name: names[name[1]], raw["Fn::Sub"])
+        if isinstance(raw, dict) and set(raw) == {"Fn::If"}:  # at the parameters' defaults, no
+            return value(raw["Fn::If"][2])                    # condition of the template holds
         assert isinstance(raw, str | int | float | bool), f"unsupported template value {raw!r}"
         return str(raw).lower() if isinstance(raw, bool) else str(raw)
 
