@@ -46,6 +46,7 @@ from drboard_assembler.record import (
     SourceLayout,
     content_hash,
 )
+from drboard_cli.transfer import IMPORT_BATCH
 from drboard_functions import ranking
 from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.service import LeaderboardService, scored_write
@@ -142,7 +143,7 @@ class RecordFactory:
         return record
 
 
-SEED_BATCH = 2000
+SEED_BATCH = IMPORT_BATCH  # as `drboard import` writes
 
 
 def seed_board(path: Path, racers: int, factory: RecordFactory) -> float:

@@ -59,7 +59,7 @@ Phase = Callable[[str, int | None], Callable[[int], None]]
 
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
 #: Submissions an import in bulk writes in one transaction.
-IMPORT_BATCH = 2000
+IMPORT_BATCH = 10_000
 #: Lines checked and prepared at a time.
 CHUNK_LINES = 500
 #: From this size on, an export's lines are checked on every core (in worker processes):

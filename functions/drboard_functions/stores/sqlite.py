@@ -170,6 +170,8 @@ INDEX_AUTHOR = ("INSERT INTO run_authors VALUES (?, ?, ?, ?, ?) ON CONFLICT (fin
                 "DO UPDATE SET first_at = excluded.first_at, board_id = excluded.board_id, "
                 "submission = excluded.submission WHERE excluded.first_at < first_at")
 INDEX_NEAR = "INSERT OR IGNORE INTO near_runs VALUES (?, ?, ?, ?, ?, ?, ?)"
+#: The page cache of a batch of an import (KiB).
+IMPORT_CACHE_KIB = 256 * 1024
 #: Values one statement binds at most (SQLite's default limit is 999 before 3.32).
 IN_CHUNK = 500
 
@@ -727,7 +729,7 @@ class SqliteStore(SqliteSeasons):
         return held, lookalikes
 
     def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
-        with self._write() as db:
+        with self._bigger_cache(), self._write() as db:
             if db.execute("SELECT 1 FROM boards WHERE board_id = ?", (board_id,)).fetchone() is None:
                 raise KeyError(board_id)
             rows = new_rows(batch.rows, self._present(db, board_id,
@@ -754,6 +756,17 @@ class SqliteStore(SqliteSeasons):
             db.executemany("INSERT OR IGNORE INTO audit VALUES (?, ?, ?)",
                            [(e.board_id, e.event_id, e.model_dump_json()) for e in batch.audit])
             return ImportWritten(created=len(rows), improved=improved)
+
+    @contextmanager
+    def _bigger_cache(self) -> Iterator[None]:
+        """A batch's pages held in memory until it commits: a batch changes pages all over the
+        board's tables, which the default cache (2 MiB) would write out and read back."""
+        before = self._db.execute("PRAGMA cache_size").fetchone()[0]
+        self._db.execute(f"PRAGMA cache_size = {-IMPORT_CACHE_KIB}")
+        try:
+            yield
+        finally:
+            self._db.execute(f"PRAGMA cache_size = {int(before)}")
 
     def _import_entries(self, db: sqlite3.Connection, board_id: str,
                         rows: Sequence[ImportedRow]) -> int:
