@@ -746,13 +746,15 @@ class SqliteStore(SqliteSeasons):
                                   for fingerprint, racer in batch.fingerprints))
             db.executemany("INSERT OR IGNORE INTO skeletons VALUES (?, ?, ?)",
                            sorted((board_id, skeleton, racer) for skeleton, racer in batch.skeletons))
-            db.executemany(INDEX_AUTHOR, sorted(
-                ((run.fingerprint, run.racer_key, run.submitted_at, board_id, run.submission_id)
-                 for run in batch.runs), key=_first(2)))
-            db.executemany(INDEX_NEAR, sorted(
-                ((run.lane, run.laps_ms[0], run.fingerprint, run.racer_key, board_id,
-                  run.submission_id, ",".join(map(str, run.laps_ms)))
-                 for run in batch.runs if run.laps_ms), key=_first(5)))
+            authors = [(run.fingerprint, run.racer_key, run.submitted_at, board_id,
+                        run.submission_id) for run in batch.runs]
+            authors.sort(key=_first(2))
+            db.executemany(INDEX_AUTHOR, authors)
+            near = [(run.lane, run.laps_ms[0], run.fingerprint, run.racer_key, board_id,
+                     run.submission_id, ",".join(map(str, run.laps_ms)))
+                    for run in batch.runs if run.laps_ms]
+            near.sort(key=_first(5))
+            db.executemany(INDEX_NEAR, near)
             db.executemany("INSERT OR IGNORE INTO audit VALUES (?, ?, ?)",
                            [(e.board_id, e.event_id, e.model_dump_json()) for e in batch.audit])
             return ImportWritten(created=len(rows), improved=improved)
