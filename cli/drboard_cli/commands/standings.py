@@ -6,6 +6,7 @@ card, which writes a file, ends as usual."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -17,6 +18,8 @@ if TYPE_CHECKING:
     from ..target import BoardClient
 
 FORMATS = ("table", "json", "csv", "markdown")
+#: How many entries a pull shows unless told.
+DEFAULT_TOP = 25
 FORMAT_HELP = "table for people, json for scripts (the README documents its fields)."
 
 
@@ -45,7 +48,7 @@ def format_option(command: Any) -> Any:
 @click.command()
 @click.option("--track", help="The track whose default board to show (any of its names).")
 @click.option("--board", help="The board id to show.")
-@click.option("--top", type=click.IntRange(1, 100_000), default=25, show_default=True,
+@click.option("--top", type=click.IntRange(1, 100_000), default=DEFAULT_TOP, show_default=True,
               help="How many entries.")
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default="table", show_default=True,
               help="table for people; json, csv or markdown for scripts and posts.")
@@ -91,6 +94,15 @@ def _print_kept(ctx: Context, board_id: str, top: int) -> bool:
         return False
     print_standings(out(), page)
     return True
+
+
+def keep_standings(ctx: Context, board_ids: Iterable[str]) -> None:
+    """After pushes to the embedded board: keep each board's standings as a pull shows them
+    unless told otherwise, so that the pull that follows answers from them."""
+    if ctx.embedded_file is None:
+        return
+    for board_id in dict.fromkeys(board_ids):
+        _keep(ctx, board_id, DEFAULT_TOP, _collect(ctx.board, board_id, DEFAULT_TOP))
 
 
 def _keep(ctx: Context, board_id: str, top: int, page: Any) -> None:

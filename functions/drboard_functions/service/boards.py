@@ -16,7 +16,7 @@ from drboard_assembler.record import RaceType, Record
 from pydantic import ValidationError
 
 from .. import display, ranking
-from ..board_ids import default_board_id
+from ..board_ids import default_board_id as default_board_id  # and for the rooms that import it here
 from ..conditions import meets, unmet
 from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
 from ..identity import Caller
