@@ -286,6 +286,14 @@ import boto3
 """)
 
 
+#: The same with Powertools alone (no validation, so no pydantic): the two libraries' shares apart.
+POWERTOOLS_CODE = FLOOR_CODE.replace("import boto3\n", """from aws_lambda_powertools import Logger, Metrics
+from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
+Logger(); Metrics(); APIGatewayHttpResolver()
+import boto3
+""")
+
+
 def floor(sandbox: Sandbox, table: str, code: str = FLOOR_CODE) -> float:
     """The floor's time, on the board the pull function reads (which the push made); with
     STACK_CODE, the floor with the functions' libraries."""
@@ -337,7 +345,7 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> tuple[Sam
     sandbox.endpoints = {"AWS_ENDPOINT_URL_DYNAMODB": server.endpoint,
                          "AWS_ENDPOINT_URL_S3": f"http://127.0.0.1:{s3.server_address[1]}"}
     client = server.client()
-    floors: dict[str, list[float]] = {"floor": [], "stack": []}
+    floors: dict[str, list[float]] = {"floor": [], "powertools": [], "stack": []}
     order = sorted(HANDLERS.values(), key=lambda k: list(FIRST_REQUEST).index(k) if k in FIRST_REQUEST
                    else len(FIRST_REQUEST))
     samples: Samples = {
@@ -354,9 +362,11 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox, runs: int) -> tuple[Sam
                         samples[kind]["import"].append(result["import_ms"])
                         samples[kind]["first"].append(result["first_ms"])
                         samples[kind]["compiled"].append(result["compiled"])
-            floor_ms, stack_ms = floor(sandbox, table), floor(sandbox, table, STACK_CODE)
+            floor_ms, powertools_ms = floor(sandbox, table), floor(sandbox, table, POWERTOOLS_CODE)
+            stack_ms = floor(sandbox, table, STACK_CODE)
             if round_:
                 floors["floor"].append(floor_ms)
+                floors["powertools"].append(powertools_ms)
                 floors["stack"].append(stack_ms)
             client.delete_table(TableName=table)
     finally:
@@ -461,8 +471,12 @@ def main(argv: list[str] | None = None) -> int:
     report.add("floor: import boto3 + a client + one Query p50", floor_p50, "ms",
                note=f"p95 {floor_p95:.0f} ms; {where} but with none of the function's code, the "
                     "pull's Query of the board the push made, on DynamoDB Local")
+    powertools_p50, _ = p50_p95(floors["powertools"])
+    report.add("floor with Powertools (resolver, logger, metrics) imported, no pydantic / floor",
+               powertools_p50 / floor_p50, "x", note=f"no target: {powertools_p50:.0f} ms p50, the "
+                                                    "resolver without validation, which imports no pydantic")
     stack_p50, _ = p50_p95(floors["stack"])
-    report.add("floor with Powertools (resolver, logger, metrics) and pydantic imported / floor",
+    report.add("floor with Powertools (resolver with validation, logger, metrics) and pydantic / floor",
                stack_p50 / floor_p50, "x", note=f"no target: {stack_p50:.0f} ms p50, what any function "
                                                "built on these libraries pays before drboard's own code")
     for kind, samples in cold.items():

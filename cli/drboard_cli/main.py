@@ -75,16 +75,18 @@ class Context:
 
     @cached_property
     def db(self) -> Path:
+        if self.explicit_db:
+            return self.explicit_db
         from . import config
 
-        return self.explicit_db or config.default_db_path()
+        return config.default_db_path()
 
     @cached_property
     def endpoint(self) -> str | None:
-        from . import config
-
         if self._endpoint or self.explicit_db:
             return self._endpoint
+        from . import config
+
         saved = config.load_settings().get("endpoint")
         return str(saved) if saved else None
 
@@ -98,6 +100,13 @@ class Context:
             else:
                 self._board = self.open_local(self.db)
         return self._board
+
+    @property
+    def embedded_file(self) -> Path | None:
+        """The embedded board's file when the commands talk to it as drboard opens it (no
+        endpoint, no opener given by a test): what is kept beside the board may then be read
+        from the file itself."""
+        return None if self.endpoint or self._open_local is not None else self.db
 
     @property
     def open_local(self) -> BoardOpener:

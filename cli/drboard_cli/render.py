@@ -3,7 +3,8 @@
 What the board stores is text, never markup: every table cell and title goes to rich as a
 ``Text`` (a racer named ``[link=…]`` is shown as written), and the consoles escape control
 characters (:mod:`.terminal`). A CSV cell that a spreadsheet would take for a formula is
-neutralised (:func:`csv_cell`).
+neutralised (:func:`csv_cell`). The standings table, which imports no model, is in
+:mod:`.standings_table` (and named here too).
 """
 
 from __future__ import annotations
@@ -54,6 +55,9 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
+from .standings_table import FLAG_MARK, plain_row, time_label
+from .standings_table import board_table as board_table  # the standings, named here too
+from .standings_table import print_standings as print_standings
 from .terminal import printable
 
 if TYPE_CHECKING:  # what only some commands show loads with them: `pull` never loads the export's
@@ -63,63 +67,6 @@ if TYPE_CHECKING:  # what only some commands show loads with them: `pull` never 
 
     from .invite import Invited
     from .transfer import ExportCounts, ImportSummary
-
-#: Beside a run the board's consistency checks flagged (`drboard show` says which checks).
-FLAG_MARK = "⚑"
-
-
-def _row(table: Table, *cells: Text | str, **options: Any) -> None:
-    """A table row whose text cells are plain text, never rich markup."""
-    table.add_row(*(Text(cell) if isinstance(cell, str) else cell for cell in cells), **options)
-
-
-def _time_label(entry: EntryView) -> str:
-    label = seconds(entry.time_ms) if entry.qualified else f"{percent(entry.best_completion_pct)} done"
-    return f"{label} {FLAG_MARK}" if entry.flags else label
-
-
-# ---- boards ----------------------------------------------------------------------------------
-
-
-def board_table(page: BoardPage, width: int = 120) -> Table:
-    """The standings; on a narrow terminal the submission time and model name give way."""
-    board = page.board
-    wide = width >= 110
-    caption = f"{board.participants} racers · {method_label(board)}"
-    if board.conditions is not None:
-        caption += f" · evaluated with {conditions.summary(board.conditions)}"
-    caption += " · times include penalties"
-    if any(entry.flags for entry in page.entries):
-        caption += f" · {FLAG_MARK} flagged by the board's checks"
-    table = Table(title=Text(f"{board.title} · {board.board_id}"), caption=Text(caption),
-                  header_style="bold")
-    table.add_column("Rank", justify="right")
-    table.add_column("Racer", overflow="fold")
-    if wide:
-        table.add_column("Model", overflow="ellipsis", max_width=24)
-    table.add_column("Time", justify="right", no_wrap=True)
-    table.add_column("Gap", justify="right", no_wrap=True)
-    table.add_column("Laps", justify="right")
-    table.add_column("Design")
-    # a default board takes runs of any conditions: each entry says its own
-    each_conditions = wide and board.conditions is None
-    if each_conditions:
-        table.add_column("Conditions")
-    if wide:
-        table.add_column("Submitted", no_wrap=True)
-    for entry in page.entries:
-        cells = [str(entry.rank), entry.racer]
-        if wide:
-            cells.append(entry.model_name)
-        cells += [_time_label(entry), gap(entry.gap_ms), str(entry.laps_completed),
-                  design_summary(entry.design)]
-        if each_conditions:
-            cells.append(conditions.short(entry.conditions))
-        if wide:
-            cells.append(entry.submitted_at.strftime("%b %d %H:%M"))
-        _row(table, *cells, style=None if entry.qualified else "dim")
-    return table
-
 
 _STATUS_STYLE = {BoardStatus.OPEN: "green", BoardStatus.UPCOMING: "yellow", BoardStatus.CLOSED: "dim"}
 
@@ -150,7 +97,7 @@ def boards_table(boards: list[BoardView], width: int = 120) -> Table:
             cells += [_status_label(board), when(board.opens_at), when(board.closes_at)]
         else:
             cells.append(_status_label(board) + _window_label(board))
-        _row(table, *cells, str(board.participants))
+        plain_row(table, *cells, str(board.participants))
     return table
 
 
@@ -173,22 +120,22 @@ def board_panel(board: BoardView) -> Panel:
     grid = Table.grid(padding=(0, 2))
     grid.add_column(style="bold")
     grid.add_column()
-    _row(grid, "Status", _status_label(board))
-    _row(grid, "Track", Text(f"{_track_label(board)} ({board.track})"))
-    _row(grid, "Timing", method_label(board))
-    _row(grid, "Flagged runs", "rank" if board.flagged_runs == "rank"
+    plain_row(grid, "Status", _status_label(board))
+    plain_row(grid, "Track", Text(f"{_track_label(board)} ({board.track})"))
+    plain_row(grid, "Timing", method_label(board))
+    plain_row(grid, "Flagged runs", "rank" if board.flagged_runs == "rank"
                  else "shown below the qualified racers, unranked")
-    _row(grid, "Conditions", conditions.summary(board.conditions) if board.conditions
+    plain_row(grid, "Conditions", conditions.summary(board.conditions) if board.conditions
          else "any (each entry shows its own)")
-    _row(grid, "Opens", when(board.opens_at) if board.opens_at else "when created")
-    _row(grid, "Closes", when(board.closes_at) if board.closes_at else "never")
+    plain_row(grid, "Opens", when(board.opens_at) if board.opens_at else "when created")
+    plain_row(grid, "Closes", when(board.closes_at) if board.closes_at else "never")
     cooldown = f"{duration(board.cooldown_s)} between a racer's submissions" if board.cooldown_s else "none"
-    _row(grid, "Cooldown", cooldown)
+    plain_row(grid, "Cooldown", cooldown)
     cap = board.max_submissions
-    _row(grid, "Submissions", f"at most {cap} per racer" if cap else "unlimited")
-    _row(grid, "Racers", str(board.participants))
+    plain_row(grid, "Submissions", f"at most {cap} per racer" if cap else "unlimited")
+    plain_row(grid, "Racers", str(board.participants))
     if board.description:
-        _row(grid, "Description", Text(board.description))
+        plain_row(grid, "Description", Text(board.description))
     kind = "named board" if board.kind == "named" else "track's default board"
     return Panel(grid, title=Text(f"{board.title} · {board.board_id}", style="bold"), subtitle=kind,
                  expand=False)
@@ -288,7 +235,7 @@ def board_markdown(page: BoardPage) -> str:
              "| Rank | Racer | Model | Time | Gap | Laps | Design |",
              "|---:|---|---|---:|---:|---:|---|"]
     for entry in page.entries:
-        cells = [str(entry.rank), entry.racer, entry.model_name, _time_label(entry),
+        cells = [str(entry.rank), entry.racer, entry.model_name, time_label(entry),
                  gap(entry.gap_ms), str(entry.laps_completed), design_summary(entry.design)]
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return printable("\n".join(lines) + "\n")
@@ -326,7 +273,7 @@ def receipt_line(receipt: PushReceipt | PushAccepted) -> Text:
     elif receipt.improved:
         text.append(" · new best", style="green")
     else:
-        text.append(f" · not better than your best ({_time_label(entry)})", style="yellow")
+        text.append(f" · not better than your best ({time_label(entry)})", style="yellow")
     if receipt.rank > 1 and entry.gap_ms is not None:
         text.append(f" · {gap(entry.gap_ms)} to the leader")
     return text
@@ -350,7 +297,7 @@ def history_table(racer: str, items: Iterable[HistoryItem], width: int = 120) ->
                  item.board_id, item.model_name, result]
         if wide:
             cells.append(seconds(item.best_lap_ms))
-        _row(table, *cells, str(item.laps_completed), "★" if item.is_best else "")
+        plain_row(table, *cells, str(item.laps_completed), "★" if item.is_best else "")
     return table
 
 
@@ -390,7 +337,7 @@ def audit_table(board_id: str, events: Iterable[AuditEvent], width: int = 120) -
         if wide:
             cells.append((event.submission_id or "")[:12])
         cells.append(audit_detail(event))
-        _row(table, *cells)
+        plain_row(table, *cells)
     return table
 
 
@@ -449,7 +396,7 @@ def alias_table(views: Iterable[AliasView], title: str = "Aliases") -> Table:
         table.add_column(name, overflow="fold")
     for view in views:
         holder = "reserved for its racer" if view.reserved else view.principal
-        _row(table, view.alias, holder, view.claimed_at.astimezone(UTC).strftime("%Y-%m-%d %H:%M"))
+        plain_row(table, view.alias, holder, view.claimed_at.astimezone(UTC).strftime("%Y-%m-%d %H:%M"))
     return table
 
 
@@ -460,7 +407,7 @@ def invite_table(done: Iterable[Invited]) -> Table:
     users = {"created": "invited now", "existed": "was there", "failed": "not created"}
     aliases = {"theirs": "theirs", "held": "another's", "failed": "not given"}
     for result in done:
-        _row(table, result.racer.email, result.racer.alias, users[result.user],
+        plain_row(table, result.racer.email, result.racer.alias, users[result.user],
              aliases[result.alias], result.problem, style=None if result.ok else "yellow")
     return table
 
@@ -507,7 +454,7 @@ def status_table(summary: RacerSummary, width: int = 120) -> Table:
         latest = status.latest
         result = _result(latest).replace(" s", "\u00a0s")  # a time and its unit stay together
         if not latest.is_best:
-            result += f" (best {_time_label(status.entry)})"
+            result += f" (best {time_label(status.entry)})"
         rank = f"{status.entry.rank} of {status.board.participants}"
         cells: list[Text | str] = [
             _board_label(status.board),
@@ -517,7 +464,7 @@ def status_table(summary: RacerSummary, width: int = 120) -> Table:
         ]
         cells += [rank, gap(status.entry.gap_ms)] if wide else [f"{rank}\n{gap(status.entry.gap_ms)}"]
         cells += [_submissions_label(status), next_submission(status)]
-        _row(table, *cells)
+        plain_row(table, *cells)
     return table
 
 
@@ -566,24 +513,24 @@ def racer_panel(view: RacerView) -> Group:
     summary = Table.grid(padding=(0, 2))
     summary.add_column(style="bold")
     summary.add_column()
-    _row(summary, "Racer", f"{view.racer} · rank {entry.rank} of {view.board.participants} on "
+    plain_row(summary, "Racer", f"{view.racer} · rank {entry.rank} of {view.board.participants} on "
                     f"{view.board.board_id}")
-    _row(summary, "Result", f"{_time_label(entry)} · gap {gap(entry.gap_ms)}")
+    plain_row(summary, "Result", f"{time_label(entry)} · gap {gap(entry.gap_ms)}")
     if record is None:
-        _row(summary, "Model", f"{entry.model_name}: how it was built is {PRIVATE_DESIGN}")
+        plain_row(summary, "Model", f"{entry.model_name}: how it was built is {PRIVATE_DESIGN}")
         return Group(summary)
-    _row(summary, "Model", f"{record.model_name} ({record.source_layout.value} files)")
+    plain_row(summary, "Model", f"{record.model_name} ({record.source_layout.value} files)")
     design = record.design
-    _row(summary, "Algorithm", algorithm_name(design.algorithm))
-    _row(summary, "Network", design.neural_network or (UNKNOWN if design.sensors is None else DASH))
-    _row(summary, "Sensors", UNKNOWN if design.sensors is None else ", ".join(design.sensors) or DASH)
-    _row(summary, "Read from", design_sources(record))
-    _row(summary, "Training", training_line(record))
-    _row(summary, "Conditions", conditions.summary(entry.conditions)
+    plain_row(summary, "Algorithm", algorithm_name(design.algorithm))
+    plain_row(summary, "Network", design.neural_network or (UNKNOWN if design.sensors is None else DASH))
+    plain_row(summary, "Sensors", UNKNOWN if design.sensors is None else ", ".join(design.sensors) or DASH)
+    plain_row(summary, "Read from", design_sources(record))
+    plain_row(summary, "Training", training_line(record))
+    plain_row(summary, "Conditions", conditions.summary(entry.conditions)
          or "unknown: the evaluation's parameters state none")
-    _row(summary, "", Text(conditions.PENALTIES_NOTE, style="dim"))
+    plain_row(summary, "", Text(conditions.PENALTIES_NOTE, style="dim"))
     if entry.flags:
-        _row(summary, f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
+        plain_row(summary, f"Flags {FLAG_MARK}", "; ".join(DESCRIPTIONS.get(f, f) for f in entry.flags))
     return Group(summary, hyperparameter_table(record), action_space_table(record),
                  laps_table(record))
 
@@ -616,12 +563,12 @@ def comparison_table(comparison: Comparison) -> Table:
     table.add_column("Fact")
     for compared in comparison.racers:
         table.add_column(Text(f"{compared.racer} (#{compared.entry.rank}, "
-                              f"{_time_label(compared.entry)})"))
+                              f"{time_label(compared.entry)})"))
     for fact, label in LABELS.items():
         differs = fact in comparison.differences
         values = [fact_text(fact, getattr(c.facts, fact), fact in c.facts.unknown)
                   for c in comparison.racers]
-        _row(table, "≠" if differs else "", label, *values, style="bold" if differs else None)
+        plain_row(table, "≠" if differs else "", label, *values, style="bold" if differs else None)
     return table
 
 
@@ -633,7 +580,7 @@ def insights_table(insights: Insights) -> Table:
     table.add_column(f"Top {insights.top}", justify="right")
     table.add_column("Field", justify="right")
     for fact in insights.facts:
-        _row(table, fact.label, fact.top + _share(fact.top_share),
+        plain_row(table, fact.label, fact.top + _share(fact.top_share),
              fact.field + _share(fact.field_share))
     return table
 
@@ -652,14 +599,14 @@ def hyperparameter_table(record: Record) -> Table:
     table.add_column("Value", justify="right")
     values = hyper.model_dump(exclude={"other"}, exclude_none=True) | hyper.other
     for name, value in sorted(values.items()):
-        _row(table, name, str(value))
+        plain_row(table, name, str(value))
     return table
 
 
 def _unknown_table(title: str, text: str) -> Table:
     table = Table(title=Text(title), show_header=False)
     table.add_column("")
-    _row(table, text)
+    plain_row(table, text)
     return table
 
 
@@ -672,8 +619,8 @@ def action_space_table(record: Record) -> Table:
         table.add_column("")
         table.add_column("Low", justify="right")
         table.add_column("High", justify="right")
-        _row(table, "Speed (m/s)", f"{space.speed.low:g}", f"{space.speed.high:g}")
-        _row(table, "Steering (°)", f"{space.steering_angle.low:g}",
+        plain_row(table, "Speed (m/s)", f"{space.speed.low:g}", f"{space.speed.high:g}")
+        plain_row(table, "Steering (°)", f"{space.steering_angle.low:g}",
                       f"{space.steering_angle.high:g}")
         return table
     table = Table(title=Text(f"Action space ({len(space.actions or [])} discrete actions)"),
@@ -682,7 +629,7 @@ def action_space_table(record: Record) -> Table:
         table.add_column(name, justify="right")
     for number, action in enumerate(space.actions or []):
         index = action.index if action.index is not None else number
-        _row(table, str(index), f"{action.steering_angle:g}", f"{action.speed:g}")
+        plain_row(table, str(index), f"{action.steering_angle:g}", f"{action.speed:g}")
     return table
 
 
@@ -692,7 +639,7 @@ def laps_table(record: Record) -> Table:
         table.add_column(name)
     for run in record.evaluations:
         for lap in run.laps:
-            _row(table, run.source.rsplit("/", 1)[-1], str(lap.trial), seconds(lap.time_ms),
+            plain_row(table, run.source.rsplit("/", 1)[-1], str(lap.trial), seconds(lap.time_ms),
                           percent(lap.completion_pct), lap.status, str(lap.off_track),
                           str(lap.crashes), str(lap.resets))
     return table

@@ -3,18 +3,17 @@
 from __future__ import annotations
 
 from datetime import UTC, datetime
+from typing import TYPE_CHECKING
 
-from .models.domain import Design, TimingMethod
-from .models.seasons import PointsTable, RoundView
-from .models.views import BoardView
+if TYPE_CHECKING:  # this module imports no model: `drboard pull` renders standings without them
+    from .models.domain import Design
+    from .models.seasons import PointsTable, RoundView
+    from .models.views import BoardView
 
 DASH = "—"
 _ALGORITHMS = {"clipped_ppo": "PPO", "sac": "SAC"}
-_METHODS = {
-    TimingMethod.BEST_LAP_TIME: "best lap",
-    TimingMethod.AVG_LAP_TIME: "average lap",
-    TimingMethod.TOTAL_TIME: "total time",
-}
+#: Each timing method's words, keyed by the ``TimingMethod`` members' values (which they equal).
+_METHODS = {"BEST_LAP_TIME": "best lap", "AVG_LAP_TIME": "average lap", "TOTAL_TIME": "total time"}
 
 
 def seconds(ms: int | None) -> str:
@@ -47,7 +46,7 @@ def design_summary(design: Design | None, *, sensors: bool = False) -> str:
     not state reads as unknown."""
     if design is None:
         return PRIVATE_DESIGN
-    if not design.known:
+    if not design_known(design):
         return UNKNOWN_DESIGN
     if design.action_space is None or design.max_speed is None or design.max_steering is None:
         summary = f"{algorithm_name(design.algorithm)}, action space unknown"
@@ -57,6 +56,11 @@ def design_summary(design: Design | None, *, sensors: bool = False) -> str:
                    f"±{design.max_steering:g}°")
     listed = ", ".join(design.sensors or [])
     return f"{summary}; {listed}" if sensors and listed else summary
+
+
+def design_known(design: Design) -> bool:
+    """Whether the run's files state the design at all (its algorithm or its action space)."""
+    return design.algorithm is not None or design.action_space is not None
 
 
 def method_label(board: BoardView) -> str:

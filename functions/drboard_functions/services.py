@@ -54,5 +54,5 @@ def dynamodb_service(table: str, *, endpoint_url: str | None = None,
 
     store = DynamoDbStore(table, client=boto3.client("dynamodb", endpoint_url=endpoint_url,
                                                      config=config))
-    archive = S3Archive(archive_bucket, client=boto3.client("s3", config=config)) if archive_bucket else None
+    archive = S3Archive(archive_bucket, config=config) if archive_bucket else None  # client on first write
     return LeaderboardService(store, archive=archive)

@@ -103,6 +103,7 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
     from drboard_assembler import assemble
 
     from .. import config, render
+    from .standings import keep_standings
 
     with edge():
         overrides = _overrides(track, custom_track, racer, model, race_type)
@@ -120,6 +121,7 @@ def push(ctx: Context, paths: tuple[Path, ...], track: str | None, custom_track:
         if len(records) == 1:
             receipt = ctx.board.push(records[0], board_id)
             out().print(render.receipt_line(receipt), soft_wrap=True)
+            keep_standings(ctx, [receipt.board_id])
         else:
             _push_batch(ctx, paths, records, board_id)
         config.save_settings(last_racer=records[-1].racer)
@@ -139,7 +141,10 @@ def _push_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record],
     where = board_id or "each run's track board"
     err().print(f"Pushing {len(records)} runs to {where}, one at a time; a run the board refuses "
                 "is named and the others still go.", soft_wrap=True)
+    from .standings import keep_standings
+
     refused: list[tuple[Path, DomainError]] = []
+    pushed_to: list[str] = []
     for path, record in zip(paths, records, strict=True):
         try:
             receipt = ctx.board.push(record, board_id)
@@ -150,6 +155,8 @@ def _push_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record],
             err().print(f"{path}: refused: {error.message}", style="yellow", soft_wrap=True)
             continue
         out().print(render.receipt_line(receipt), soft_wrap=True)
+        pushed_to.append(receipt.board_id)
+    keep_standings(ctx, pushed_to)
     pushed = len(records) - len(refused)
     if refused:
         named = "; ".join(f"{path} ({type(error).__name__})" for path, error in refused)

@@ -6,6 +6,7 @@ card, which writes a file, ends as usual."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -17,11 +18,13 @@ if TYPE_CHECKING:
     from ..target import BoardClient
 
 FORMATS = ("table", "json", "csv", "markdown")
+#: How many entries a pull shows unless told.
+DEFAULT_TOP = 25
 FORMAT_HELP = "table for people, json for scripts (the README documents its fields)."
 
 
 def _board_id(track: str | None, board: str | None) -> str:
-    from drboard_functions.service import board_for_track
+    from drboard_functions.board_ids import board_for_track
 
     if bool(track) == bool(board):
         raise click.UsageError("give one of --track or --board")
@@ -45,7 +48,7 @@ def format_option(command: Any) -> Any:
 @click.command()
 @click.option("--track", help="The track whose default board to show (any of its names).")
 @click.option("--board", help="The board id to show.")
-@click.option("--top", type=click.IntRange(1, 100_000), default=25, show_default=True,
+@click.option("--top", type=click.IntRange(1, 100_000), default=DEFAULT_TOP, show_default=True,
               help="How many entries.")
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default="table", show_default=True,
               help="table for people; json, csv or markdown for scripts and posts.")
@@ -57,12 +60,63 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
     """Show a board's standings: rank, time, gap to the leader and each model's design."""
     with edge():
         board_id = _board_id(track, board)
+        if fmt == "table" and output is None and _print_kept(ctx, board_id, top):
+            finish()
+            return
         if board:
             page = _collect(ctx.board, board_id, top)
         else:
             page = _track_page(ctx.board, track or "", board_id, top)
+        _keep(ctx, board_id, top, page)
         _emit(page, fmt, output)
     finish()
+
+
+def _print_kept(ctx: Context, board_id: str, top: int) -> bool:
+    """Print the standings kept beside the embedded board for the board as it is now, if any
+    are and the terminal's table needs nothing they keep as text; whether it did. This is
+    how a repeated pull answers without loading the service and its models."""
+    import json
+    import time
+
+    from drboard_functions.stores.sqlite_standings import kept_page
+
+    from ..standings_table import WIDE, Fields, print_standings
+
+    db = ctx.embedded_file
+    if db is None or out().width >= WIDE:
+        return False
+    kept = kept_page(db, board_id, top, time.time())
+    if kept is None:
+        return False
+    page = json.loads(kept, object_hook=Fields)
+    if page.board.conditions is not None:
+        return False
+    print_standings(out(), page)
+    return True
+
+
+def keep_standings(ctx: Context, board_ids: Iterable[str]) -> None:
+    """After pushes to the embedded board: keep each board's standings as a pull shows them
+    unless told otherwise, so that the pull that follows answers from them."""
+    if ctx.embedded_file is None:
+        return
+    for board_id in dict.fromkeys(board_ids):
+        _keep(ctx, board_id, DEFAULT_TOP, _collect(ctx.board, board_id, DEFAULT_TOP))
+
+
+def _keep(ctx: Context, board_id: str, top: int, page: Any) -> None:
+    """Keep the page beside the embedded board, for the next pull of it (:func:`_print_kept`)."""
+    from drboard_functions.board_window import next_change
+    from drboard_functions.models.domain import MAX_PAGE
+    from drboard_functions.stores.sqlite_standings import keep_page
+
+    db = ctx.embedded_file
+    if db is None or top > MAX_PAGE or page.board.board_id != board_id:
+        return
+    change = next_change(page.board)
+    keep_page(db, board_id, top, page.board.version, change.timestamp() if change else None,
+              page.model_dump_json())
 
 
 def _track_page(client: BoardClient, track: str, board_id: str, top: int) -> Any:
@@ -115,10 +169,8 @@ def _emit(page: Any, fmt: str, output: Path | None) -> None:
         if output:
             with output.open("w", encoding="utf-8") as handle:
                 render.plain_console(handle).print(render.board_table(page))
-        elif page.entries:
-            out().print(render.board_table(page, out().width))
         else:
-            out().print(f"{page.board.title}: no entries yet.", markup=False)
+            render.print_standings(out(), page)
         return
     text = {"json": render.board_json, "csv": render.board_csv,
             "markdown": render.board_markdown}[fmt](page)

@@ -9,7 +9,7 @@ from datetime import datetime
 from ..display import gap, ordinal, percent, points_text, seconds
 from ..models.domain import BoardStatus, TimingMethod
 from ..models.seasons import SeasonStandings, Standing
-from ..models.views import EntryView, RacerView
+from ..models.views import BoardView, EntryView
 
 _RESULT = {TimingMethod.BEST_LAP_TIME: "best lap", TimingMethod.AVG_LAP_TIME: "average lap",
            TimingMethod.TOTAL_TIME: "total time"}
@@ -55,9 +55,9 @@ class Podium:
     date: str
 
 
-def racer_card(view: RacerView, runner_up: EntryView | None = None) -> RacerCard:
-    """The card of ``view``'s entry; ``runner_up`` is the board's second, for the leader's lead."""
-    entry, board = view.entry, view.board
+def racer_card(board: BoardView, entry: EntryView, runner_up: EntryView | None = None) -> RacerCard:
+    """The card of the racer's ``entry`` on ``board``; ``runner_up`` is the board's second, for
+    the leader's lead."""
     if entry.qualified:
         result, label = seconds(entry.time_ms), _RESULT[board.method]
         if entry.rank == 1:

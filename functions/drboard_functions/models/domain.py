@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, TypeVar
 from drboard_assembler.record import Conditions, RaceType
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
+from ..display import design_known
+
 if TYPE_CHECKING:
     from .views import BoardView
 
@@ -265,7 +267,7 @@ class Design(Model):
 
     @property
     def known(self) -> bool:
-        return self.algorithm is not None or self.action_space is not None
+        return design_known(self)
 
 
 class Entry(Model):

@@ -43,7 +43,8 @@ from typing import TYPE_CHECKING, Literal, NamedTuple
 from urllib.parse import parse_qsl, unquote
 from weakref import WeakKeyDictionary
 
-from ..models.domain import MAX_PAGE, BoardStatus
+from ..board_window import next_change
+from ..models.domain import MAX_PAGE
 from ..views import page_tag
 from .responses import HTML, PAGE_HEADERS, etag_headers, names_etag, page_etag, page_policy
 
@@ -150,11 +151,7 @@ def _copy(version: int, fresh_until: datetime | None, etag: str, text: str,
 def fresh_until(board: BoardView, now: datetime, *, countdown: bool) -> datetime | None:
     """Until when a page of the board rendered ``now`` holds, its version unchanged: the board's
     next opening or closing (None: never), and a countdown's refresh."""
-    change = None
-    if board.status is BoardStatus.UPCOMING and board.opens_at is not None:
-        change = board.opens_at
-    elif board.status is BoardStatus.OPEN and board.closes_at is not None:
-        change = board.closes_at
+    change = next_change(board)
     if change is not None and countdown:
         return min(change, now + timedelta(seconds=COUNTDOWN_REFRESH_S))
     return change

@@ -23,16 +23,8 @@ from functools import cached_property
 from importlib import import_module
 from typing import TYPE_CHECKING, Any, Concatenate, ParamSpec, TypeVar
 
-from .boards import (
-    CUSTOM_PREFIX,
-    BoardKeeper,
-    Clock,
-    board_for_track,
-    default_board_id,
-    is_default_board_id,
-    racer_key,
-    utc_now,
-)
+from ..board_ids import CUSTOM_PREFIX, board_for_track, default_board_id, is_default_board_id
+from .boards import BoardKeeper, Clock, racer_key, utc_now
 
 if TYPE_CHECKING:
     from ..models.notices import EntryChange

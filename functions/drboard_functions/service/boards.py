@@ -16,6 +16,7 @@ from drboard_assembler.record import RaceType, Record
 from pydantic import ValidationError
 
 from .. import display, ranking
+from ..board_ids import default_board_id as default_board_id  # and for the rooms that import it here
 from ..conditions import meets, unmet
 from ..errors import BoardClosed, BoardLocked, BoardMismatch, BoardNotFound, InvalidQuery
 from ..identity import Caller
@@ -30,14 +31,6 @@ if TYPE_CHECKING:
 
 Clock = Callable[[], datetime]
 
-_RACE_SUFFIX = {
-    RaceType.TIME_TRIAL: "",
-    RaceType.OBJECT_AVOIDANCE: "_oa",
-    RaceType.HEAD_TO_BOT: "_h2b",
-    RaceType.HEAD_TO_MODEL: "_h2m",
-    RaceType.HEAD_TO_HEAD_RACING: "_h2h",
-    RaceType.F1: "_f1",
-}
 _RACE_TITLE = {
     RaceType.TIME_TRIAL: "",
     RaceType.OBJECT_AVOIDANCE: ", object avoidance",
@@ -46,10 +39,6 @@ _RACE_TITLE = {
     RaceType.HEAD_TO_HEAD_RACING: ", head to head",
     RaceType.F1: ", F1",
 }
-
-#: A custom track's default boards are ``custom.<track>...``: a push for a track of one's own
-#: can take neither an official track's board id nor a named board's (which may not start so).
-CUSTOM_PREFIX = "custom."
 
 LOCKED = ("{!r} has entries: its track, timing method, minimum laps, flagged-run rule and required "
           "conditions can no longer change "
@@ -65,55 +54,6 @@ def utc_now() -> datetime:
 def racer_key(racer: str) -> str:
     """Racer aliases are matched after Unicode NFKC and case folding, white space collapsed."""
     return alias_key(racer)
-
-
-def default_board_id(track: str, direction: str | None, race_type: RaceType) -> str:
-    """A track's default board: counter-clockwise and unspecified runs share the track's board;
-    clockwise runs, and race types other than time trial, rank on boards of their own."""
-    prefix = "" if default_catalog().is_official(track) else CUSTOM_PREFIX
-    return prefix + track + ("_cw" if direction == "cw" else "") + _RACE_SUFFIX[race_type]
-
-
-def board_for_track(name: str, race_type: RaceType = RaceType.TIME_TRIAL,
-                    clockwise: bool = False) -> str:
-    """The default board of a track given by any of its names (``reInvent2019``, ``Smile
-    Speedway``, ``reInvent2019_track_cw``), or by the id of one of its default boards as a push
-    prints it (``Belille_oa``). An unknown name is taken as a custom track's id."""
-    try:
-        resolved = default_catalog().resolve(name)
-    except UnknownTrackError as error:
-        if race_type is RaceType.TIME_TRIAL and (board := _named_by_board_id(name.strip())):
-            return board
-        if error.ambiguous or error.candidates:
-            raise InvalidQuery(str(error)) from None
-        return default_board_id(name.strip(), "cw" if clockwise else None, race_type)
-    direction = "cw" if clockwise else resolved.direction
-    return default_board_id(resolved.track_id, direction, race_type)
-
-
-def _named_by_board_id(name: str) -> str | None:
-    """The default board a name ending in a race type's suffix (``_oa``, ``_h2b``, …) names, if
-    the rest of it is a track's name."""
-    for race_type, suffix in _RACE_SUFFIX.items():
-        if suffix and name.endswith(suffix) and len(name) > len(suffix):
-            try:
-                resolved = default_catalog().resolve(name[: -len(suffix)])
-            except UnknownTrackError:
-                return None
-            return default_board_id(resolved.track_id, resolved.direction, race_type)
-    return None
-
-
-def is_default_board_id(board_id: str) -> bool:
-    """Whether the id is the default board of a catalog track (for any direction and race)."""
-    catalog = default_catalog()
-    for race_suffix in _RACE_SUFFIX.values():
-        for direction in ("_cw", ""):
-            suffix = direction + race_suffix
-            base = board_id[: len(board_id) - len(suffix)] if suffix else board_id
-            if board_id.endswith(suffix) and base and catalog.get(base) is not None:
-                return True
-    return False
 
 
 def default_board(record: Record, now: datetime) -> Board:

@@ -2,20 +2,13 @@
 
 from __future__ import annotations
 
+from ..board_ids import CUSTOM_PREFIX, default_board_id, is_default_board_id
 from ..errors import BoardExists, BoardLocked, BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import BoardConditions, BoardRules, BoardStatus
 from ..models.requests import BoardChanges, BoardSpec
 from ..models.views import BoardView, RankCounters
-from .boards import (
-    CUSTOM_PREFIX,
-    LOCKED,
-    BoardKeeper,
-    default_board_id,
-    is_default_board_id,
-    spec_track,
-    valid_board,
-)
+from .boards import LOCKED, BoardKeeper, spec_track, valid_board
 
 
 def _required(conditions: BoardConditions | None) -> BoardConditions | None:

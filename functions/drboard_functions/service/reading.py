@@ -133,6 +133,17 @@ class Reading:
             "scored_run": scored_run(record, entry, stored.board) if shown else None,
         }, context={"stored": True})
 
+    def standing(self, board_id: str, racer: str) -> tuple[BoardView, EntryView]:
+        """The board and the racer's entry on it, ranked, as :meth:`racer` shows them, without
+        their record or history (what a result card says: reading neither keeps a card's cold
+        start from parsing a whole record)."""
+        stored = self.keeper.require(board_id)
+        entry = self._entry(board_id, racer)
+        rank = self.store.count_better(board_id, entry.score_key) + 1
+        shown = stored.board.designs_shown(self.clock())
+        return (self.keeper.view(stored),
+                entry_view(entry, rank, self.keeper.leader(board_id), design=shown))
+
     def compare(self, board_id: str, racers: Sequence[str]) -> Comparison:
         """The racers' designs side by side, and the facts they differ on."""
         if not 2 <= len(racers) <= MAX_COMPARED:
@@ -178,13 +189,17 @@ class Reading:
                                  + (f" ({board.closes_at.isoformat()})" if board.closes_at else ""))
 
     def _entry_and_record(self, board_id: str, racer: str) -> tuple[Entry, Record]:
-        entry = self.store.get_entry(board_id, racer_key(racer))
-        if entry is None:
-            raise RacerNotFound(f"{racer!r} has no entry on {board_id!r}")
+        entry = self._entry(board_id, racer)
         record = self.store.get_record(board_id, entry.submission_id)
         if record is None:  # pragma: no cover - an entry always has its submission
             raise RacerNotFound(f"the record of {racer!r} on {board_id!r} is missing")
         return entry, record
+
+    def _entry(self, board_id: str, racer: str) -> Entry:
+        entry = self.store.get_entry(board_id, racer_key(racer))
+        if entry is None:
+            raise RacerNotFound(f"{racer!r} has no entry on {board_id!r}")
+        return entry
 
     # ---- a racer's submissions ------------------------------------------------------------
 

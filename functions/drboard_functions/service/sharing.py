@@ -25,12 +25,12 @@ class Sharing:
         their time and gap to the leader (the leader's lead), and their model."""
         from .. import cards
 
-        view = self.reading.racer(board_id, racer, 1)
+        board, entry = self.reading.standing(board_id, racer)
         runner_up = None
-        if view.entry.rank == 1 and view.entry.qualified:
+        if entry.rank == 1 and entry.qualified:
             second = self.reading.board_page(board_id, limit=2, cursor=None).entries[1:]
             runner_up = second[0] if second else None
-        return cards.racer_svg(cards.racer_card(view, runner_up))
+        return cards.racer_svg(cards.racer_card(board, entry, runner_up))
 
     def racer_card(self, board_id: str, racer: str, kind: CardKind = "png") -> bytes:
         """The racer's card as a file: the PNG (1200×630), or its SVG source."""

@@ -14,6 +14,7 @@ itself.
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import TYPE_CHECKING
 from urllib.parse import quote
 
@@ -24,19 +25,29 @@ from ..errors import StoreBusy, StoreUnavailable
 from .aws_errors import UNAVAILABLE_RETRY_AFTER_S, code_of, store_error
 
 if TYPE_CHECKING:
+    from botocore.config import Config
     from mypy_boto3_s3 import S3Client
 
 PREFIX = "records/"
 
 
 class S3Archive:
-    def __init__(self, bucket: str, client: S3Client | None = None) -> None:
-        self.bucket = bucket
-        if client is None:
-            import boto3  # here, so that importing the module stays cheap for a cold start
+    """``client`` is the S3 client to use; without one, the archive makes its own (with
+    ``config``) when it first writes, so that a function whose request writes no record (most of
+    the admin function's) never pays for an S3 client in its cold start."""
 
-            client = boto3.client("s3")
-        self._client: S3Client = client
+    def __init__(self, bucket: str, client: S3Client | None = None, config: Config | None = None) -> None:
+        self.bucket = bucket
+        self._given = client
+        self._config = config
+
+    @cached_property
+    def _client(self) -> S3Client:
+        if self._given is not None:
+            return self._given
+        import boto3  # here, so that importing the module stays cheap for a cold start
+
+        return boto3.client("s3", config=self._config)
 
     @staticmethod
     def key(board_id: str, submission_id: str) -> str:
