@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+import threading
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
@@ -70,13 +71,22 @@ def in_workers(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(transfer, "_workers", lambda size: 2)
 
 
+@pytest.mark.parametrize("progress_bar", [False, True],
+                         ids=["alone (fork)", "beside a progress bar's thread (spawn)"])
 def test_lines_checked_in_workers_give_the_board_checking_them_here_gives(
-        exported: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        exported: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, progress_bar: bool) -> None:
     here = imported(exported, tmp_path / "here.db")
-    with monkeypatch.context() as patch:
-        patch.setattr(transfer, "CHUNK_LINES", 7)
-        patch.setattr(transfer, "_workers", lambda size: 2)
-        in_workers = imported(exported, tmp_path / "workers.db")
+    done = threading.Event()
+    other = threading.Thread(target=done.wait)
+    if progress_bar:
+        other.start()
+    try:
+        with monkeypatch.context() as patch:
+            patch.setattr(transfer, "CHUNK_LINES", 7)
+            patch.setattr(transfer, "_workers", lambda size: 2)
+            in_workers = imported(exported, tmp_path / "workers.db")
+    finally:
+        done.set()
     assert (in_workers.created, in_workers.duplicates) == (here.created, here.duplicates) == (43, 0)
     assert in_workers.board.participants == 42
     assert rows(tmp_path / "workers.db") == rows(tmp_path / "here.db")
