@@ -748,9 +748,11 @@ def bench_import(report: Report, exported: Path, workdir: Path, label: str, runs
                           "one transaction",
                ratio_limit=IMPORT_VS_EXECUTEMANY_MAX_X,
                note=f"median of {runs} runs in turns (first run {first.wall:.1f} s); the import "
-                    "checks every record (schema, bounds, content hash, size) before it writes")
+                    "checks every record (schema, bounds, content hash, size) before it writes, "
+                    "on every core")
     report.add(f"`drboard import` {label}: CPU time", times["import"].cpu, "s",
-               floor=times["floor"].cpu, floor_name="the same executemany's CPU time")
+               floor=times["floor"].cpu, floor_name="the same executemany's CPU time",
+               note="the import's own and its workers'")
 
 
 # ---- main ---------------------------------------------------------------------------------------
