@@ -37,6 +37,7 @@ sys.path.insert(0, str(ROOT))  # the tests package: DynamoDB Local and the table
 from click.testing import CliRunner  # noqa: E402
 from drboard_cli.commands.organisers import LOCAL_REBUILD_STEP_S  # noqa: E402
 from drboard_cli.main import cli  # noqa: E402
+from drboard_cli.transfer import IMPORT_BATCH  # noqa: E402  (as `drboard import` loads them)
 from drboard_functions import ranking  # noqa: E402
 from drboard_functions.models.domain import Board, Design, Entry, Score  # noqa: E402
 from drboard_functions.models.requests import ImportedSubmission  # noqa: E402
@@ -61,7 +62,6 @@ from figures import Report, p50_p95, timed_ms  # noqa: E402
 
 TRACK = "reInvent2019_track"
 TABLE = "drboard-bench"
-IMPORT_BATCH = 2000  # as `drboard import` loads them
 PAGE = 100
 
 # ---- targets --------------------------------------------------------------------------------

@@ -149,7 +149,9 @@ class _Lane:
     (fingerprint, racer key, board id, submission id, sorted complete laps)."""
 
     def __init__(self, runs: Sequence[NearRun]) -> None:
-        self.by_best: dict[int, list[NearTuple]] = {}
+        #: Best lap -> the runs with it, each beside its slowest lap (most runs a best lap
+        #: finds are told apart by their slowest, so that is compared first).
+        self.by_best: dict[int, list[tuple[int, NearTuple]]] = {}
         self.keys: set[tuple[int, str, str, str]] = set()
         for run in runs:
             self.add((run.fingerprint, run.racer_key, run.board_id, run.submission_id,
@@ -159,15 +161,17 @@ class _Lane:
         key = (run[4][0], run[0], run[1], run[2])
         if key not in self.keys:
             self.keys.add(key)
-            self.by_best.setdefault(run[4][0], []).append(run)
+            self.by_best.setdefault(run[4][0], []).append((run[4][-1], run))
 
     def copied(self, fingerprint: str, racer_key: str, laps: tuple[int, ...]) -> NearTuple | None:
         """Another racer's run whose laps are each within NEAR_MS of these, the first in the
         order the store reads them (by best lap, fingerprint, racer and board), or None."""
+        slowest = laps[-1]
         found = [run for best in range(laps[0] - NEAR_MS, laps[0] + NEAR_MS + 1)
-                 for run in self.by_best.get(best, ())
-                 if run[1] != racer_key and run[0] != fingerprint and len(run[4]) == len(laps)
-                 and abs(run[4][-1] - laps[-1]) <= NEAR_MS and same_laps(list(laps), list(run[4]))]
+                 for other_slowest, run in self.by_best.get(best, ())
+                 if -NEAR_MS <= other_slowest - slowest <= NEAR_MS and len(run[4]) == len(laps)
+                 and run[1] != racer_key and run[0] != fingerprint
+                 and same_laps(list(laps), list(run[4]))]
         return min(found, key=lambda run: (run[4][0], run[0], run[1], run[2])) if found else None
 
 

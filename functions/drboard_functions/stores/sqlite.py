@@ -170,6 +170,8 @@ INDEX_AUTHOR = ("INSERT INTO run_authors VALUES (?, ?, ?, ?, ?) ON CONFLICT (fin
                 "DO UPDATE SET first_at = excluded.first_at, board_id = excluded.board_id, "
                 "submission = excluded.submission WHERE excluded.first_at < first_at")
 INDEX_NEAR = "INSERT OR IGNORE INTO near_runs VALUES (?, ?, ?, ?, ?, ?, ?)"
+#: The page cache of a batch of an import (KiB).
+IMPORT_CACHE_KIB = 256 * 1024
 #: Values one statement binds at most (SQLite's default limit is 999 before 3.32).
 IN_CHUNK = 500
 
@@ -727,7 +729,7 @@ class SqliteStore(SqliteSeasons):
         return held, lookalikes
 
     def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
-        with self._write() as db:
+        with self._bigger_cache(), self._write() as db:
             if db.execute("SELECT 1 FROM boards WHERE board_id = ?", (board_id,)).fetchone() is None:
                 raise KeyError(board_id)
             rows = new_rows(batch.rows, self._present(db, board_id,
@@ -736,18 +738,37 @@ class SqliteStore(SqliteSeasons):
                            [(board_id, row.submission_id, row.racer_key, row.submitted_at,
                              row.submission, row.record) for row in rows])
             improved = self._import_entries(db, board_id, rows)
+            # Each table's rows in the order of its key (a stable sort: rows of one key keep
+            # their order, so the first of them still wins), so that the batch fills each
+            # table's pages in turn rather than all of them at random.
             db.executemany("INSERT OR IGNORE INTO fingerprints VALUES (?, ?, ?)",
-                           [(board_id, fingerprint, racer) for fingerprint, racer in batch.fingerprints])
+                           sorted((board_id, fingerprint, racer)
+                                  for fingerprint, racer in batch.fingerprints))
             db.executemany("INSERT OR IGNORE INTO skeletons VALUES (?, ?, ?)",
-                           [(board_id, skeleton, racer) for skeleton, racer in batch.skeletons])
-            db.executemany(INDEX_AUTHOR, [(run.fingerprint, run.racer_key, run.submitted_at, board_id,
-                                           run.submission_id) for run in batch.runs])
-            db.executemany(INDEX_NEAR, [(run.lane, run.laps_ms[0], run.fingerprint, run.racer_key,
-                                         board_id, run.submission_id, ",".join(map(str, run.laps_ms)))
-                                        for run in batch.runs if run.laps_ms])
+                           sorted((board_id, skeleton, racer) for skeleton, racer in batch.skeletons))
+            authors = [(run.fingerprint, run.racer_key, run.submitted_at, board_id,
+                        run.submission_id) for run in batch.runs]
+            authors.sort(key=_first(2))
+            db.executemany(INDEX_AUTHOR, authors)
+            near = [(run.lane, run.laps_ms[0], run.fingerprint, run.racer_key, board_id,
+                     run.submission_id, ",".join(map(str, run.laps_ms)))
+                    for run in batch.runs if run.laps_ms]
+            near.sort(key=_first(5))
+            db.executemany(INDEX_NEAR, near)
             db.executemany("INSERT OR IGNORE INTO audit VALUES (?, ?, ?)",
                            [(e.board_id, e.event_id, e.model_dump_json()) for e in batch.audit])
             return ImportWritten(created=len(rows), improved=improved)
+
+    @contextmanager
+    def _bigger_cache(self) -> Iterator[None]:
+        """A batch's pages held in memory until it commits: a batch changes pages all over the
+        board's tables, which the default cache (2 MiB) would write out and read back."""
+        before = self._db.execute("PRAGMA cache_size").fetchone()[0]
+        self._db.execute(f"PRAGMA cache_size = {-IMPORT_CACHE_KIB}")
+        try:
+            yield
+        finally:
+            self._db.execute(f"PRAGMA cache_size = {int(before)}")
 
     def _import_entries(self, db: sqlite3.Connection, board_id: str,
                         rows: Sequence[ImportedRow]) -> int:
@@ -766,16 +787,19 @@ class SqliteStore(SqliteSeasons):
         if not best:
             return 0
         db.executemany("INSERT OR REPLACE INTO entries VALUES (?, ?, ?, ?, ?)",
-                       [(board_id, racer, row.score_key, row.rank_key, row.entry)
-                        for racer, row in best.items()])
+                       sorted((board_id, racer, row.score_key, row.rank_key, row.entry)
+                              for racer, row in best.items()))
+        # The batch's counts, tallied once: the new entries' minus those they replace.
+        added = rank_buckets.tally([row.score_key for row in best.values()])
+        removed = rank_buckets.tally([before[racer][0] for racer in best if racer in before])
         moves: dict[str, dict[str, int]] = {}
-        for racer, row in best.items():
-            removed = before[racer][0] if racer in before else None
-            for node, children in rank_buckets.changes(row.score_key, removed).items():
-                counts = moves.setdefault(node, {})
-                for child, change in children.items():
-                    counts[child] = counts.get(child, 0) + change
-        self._move_counts(db, board_id, moves)
+        for sign, counts in ((1, added), (-1, removed)):
+            for node, children in counts.items():
+                moved = moves.setdefault(node, {})
+                for child, count in children.items():
+                    moved[child] = moved.get(child, 0) + sign * count
+        self._move_counts(db, board_id, {node: kept for node, children in moves.items()
+                                         if (kept := {c: n for c, n in children.items() if n})})
         db.execute("UPDATE boards SET participants = participants + ?, version = version + 1 "
                    "WHERE board_id = ?", (sum(racer not in before for racer in best), board_id))
         return len(best)
@@ -891,6 +915,11 @@ def _in_chunks(db: sqlite3.Connection, query: str, fixed: tuple[str, ...],
     for start in range(0, len(values), IN_CHUNK):
         chunk = values[start:start + IN_CHUNK]
         yield from db.execute(query.format(",".join("?" * len(chunk))), (*fixed, *chunk))
+
+
+def _first(columns: int) -> Callable[[tuple[Any, ...]], tuple[Any, ...]]:
+    """A row's first ``columns`` values: its key, for sorting rows by it."""
+    return lambda row: row[:columns]
 
 
 BOARD_COLUMNS = "board, participants, version, settings_version"
