@@ -216,6 +216,11 @@ class BoardServer:
         # network call: it is read in the pool.)
         self.versions_on_loop = isinstance(service.store, SqliteStore)
         self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
+        # The embedded board takes one write at a time: pushes wait their turn in one thread of
+        # their own, rather than in SQLite's busy handler (which sleeps between its tries) in
+        # threads that contend for the interpreter meanwhile. A DynamoDB table takes them at once.
+        self.writes = (ThreadPoolExecutor(1, thread_name_prefix="drboard-serve-push")
+                       if self.versions_on_loop else self.pool)
         self.open_streams = 0
         self.socket = _listening_socket(address)
         self.server_address: tuple[str, int] = self.socket.getsockname()[:2]
@@ -251,7 +256,8 @@ class BoardServer:
 
     def server_close(self) -> None:
         self.server.should_exit = True
-        self.pool.shutdown(wait=True)  # a push still being written is written
+        self.writes.shutdown(wait=True)  # a push still being written is written
+        self.pool.shutdown(wait=True)
         self.socket.close()
 
     # ---- requests, as API Gateway events (synchronous: run in the pool) ------------------------
@@ -401,7 +407,9 @@ class BoardServer:
         event = http_event(scope["method"], f"{path}?{query}" if query else path,
                            _header_dict(scope), body, _client_ip(scope))
         loop = asyncio.get_running_loop()
-        result = await loop.run_in_executor(self.pool, self.handle_event, event)
+        pushing = scope["method"] == "POST" and _PUSH_PATH.match(path)
+        executor = self.writes if pushing else self.pool
+        result = await loop.run_in_executor(executor, self.handle_event, event)
         status, headers, data = _http_answer(result)
         await send({"type": "http.response.start", "status": status, "headers": headers})
         await send({"type": "http.response.body", "body": data})

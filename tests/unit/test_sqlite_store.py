@@ -107,6 +107,53 @@ def test_opening_a_new_file_waits_for_another_writer(tmp_path: Path) -> None:
         other.close()
 
 
+def test_threads_of_one_process_write_in_turns_and_every_push_lands(tmp_path: Path) -> None:
+    store = SqliteStore(tmp_path / "board.db")
+    store.create_board(make_board())
+    racers = [f"Racer{n:02d}" for n in range(24)]
+
+    def push(n: int) -> None:
+        submit(store, make_record(racers[n], [(10000 + 37 * n, 100)]), at(n))
+
+    threads = [threading.Thread(target=push, args=(n,)) for n in range(len(racers))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert [entry.racer for entry in store.top(TRACK, 50)] == racers
+    stored = store.get_board(TRACK)
+    assert stored is not None and stored.participants == len(racers)
+    store.close()
+
+
+def test_a_write_held_past_the_busy_timeout_in_this_process_is_store_busy(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from drboard_functions import errors
+    from drboard_functions.stores import sqlite as sqlite_store
+
+    monkeypatch.setattr(sqlite_store, "BUSY_TIMEOUT_S", 0.2)
+    store = SqliteStore(tmp_path / "board.db")
+    store.create_board(make_board())
+    holding, done = threading.Event(), threading.Event()
+
+    def hold() -> None:
+        with store._write():
+            holding.set()
+            done.wait(5)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    holding.wait(5)
+    try:
+        with pytest.raises(errors.StoreBusy, match="busy with another writer"):
+            submit(store, make_record("Ada", [(12000, 100)]), at(1))
+    finally:
+        done.set()
+        holder.join()
+    assert store.top(TRACK, 10) == []
+    store.close()
+
+
 def test_a_board_file_from_before_versions_opens_and_counts_from_zero(tmp_path: Path) -> None:
     path = tmp_path / "old.db"
     old = sqlite3.connect(path)
