@@ -31,6 +31,7 @@ The HTTP side is uvicorn (h11): keep-alive without Nagle's delay, a listen backl
 connections let go (also one that connects and never finishes a request), graceful shutdown.
 Each request's resolver call runs in a small thread pool, each with resolvers of its own, so a
 slow one holds neither the server loop nor the other requests; an event stream holds no thread.
+Pushes to the embedded board, which takes one write at a time, take turns in a thread of their own.
 """
 
 from __future__ import annotations
