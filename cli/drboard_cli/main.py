@@ -58,6 +58,14 @@ def err() -> Console:
     return console(stderr=True)
 
 
+def write_text(text: str, output: Path | None) -> None:
+    """A command's text output: to the ``-o`` file when given, else to standard output."""
+    if output:
+        output.write_text(text, "utf-8")
+    else:
+        click.echo(text, nl=False)
+
+
 BoardOpener = Callable[[Path], "BoardClient"]
 
 

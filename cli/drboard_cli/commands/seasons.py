@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from .. import board_options
-from ..main import Context, edge, out, pass_context
+from ..main import Context, edge, out, pass_context, write_text
 
 if TYPE_CHECKING:
     from drboard_functions.models.seasons import PointsTable, SeasonStandings
@@ -262,10 +262,7 @@ def season_standings(ctx: Context, season_id: str, top: int, fmt: str, output: P
             return
         text = {"json": season_render.standings_json, "csv": season_render.standings_csv,
                 "markdown": season_render.standings_markdown}[fmt](standings)
-        if output:
-            output.write_text(text, "utf-8")
-        else:
-            click.echo(text, nl=False)
+        write_text(text, output)
 
 
 @season_group.command(name="card")

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ..main import Context, edge, finish, out, pass_context
+from ..main import Context, edge, finish, out, pass_context, write_text
 
 if TYPE_CHECKING:
     from ..target import BoardClient
@@ -174,10 +174,7 @@ def _emit(page: Any, fmt: str, output: Path | None) -> None:
         return
     text = {"json": render.board_json, "csv": render.board_csv,
             "markdown": render.board_markdown}[fmt](page)
-    if output:
-        output.write_text(text, "utf-8")
-    else:
-        click.echo(text, nl=False)
+    write_text(text, output)
 
 
 @click.command()
