@@ -3,9 +3,9 @@ deployed board (or `drboard serve`) answers the same calls over HTTP (``remote.H
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol, TypeVar
 
 if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` imports no model
     from drboard_assembler.record import Record
@@ -103,6 +103,25 @@ class BoardClient(Protocol):
     def clear_final(self, season_id: str) -> SeasonStandings: ...
     def close_season(self, season_id: str) -> SeasonStandings: ...
     def reopen_season(self, season_id: str) -> SeasonStandings: ...
+
+
+class Paged(Protocol):
+    @property
+    def next_cursor(self) -> str | None: ...
+
+
+PageT = TypeVar("PageT", bound=Paged)
+
+
+def every_page(fetch: Callable[[str | None], PageT]) -> Iterator[PageT]:
+    """Each page of a paged call (``fetch(cursor)``), from the first until one has no next."""
+    cursor: str | None = None
+    while True:
+        page = fetch(cursor)
+        yield page
+        cursor = page.next_cursor
+        if cursor is None:
+            return
 
 
 def local_board(db: Path) -> BoardClient:

@@ -8,6 +8,7 @@ from typing import IO
 import click
 
 from ..main import BAD_INPUT, FAILURE, Context, edge, err, fail, out, pass_context
+from ..target import every_page
 
 PAGE = 500
 FORMAT_HELP = "table for people, json for scripts."
@@ -33,14 +34,8 @@ def aliases_list(ctx: Context, fmt: str) -> None:
     from .. import render
 
     with edge():
-        views = []
-        cursor: str | None = None
-        while True:
-            page = ctx.board.aliases(PAGE, cursor)
-            views.extend(page.aliases)
-            cursor = page.next_cursor
-            if cursor is None:
-                break
+        views = [view for page in every_page(lambda cursor: ctx.board.aliases(PAGE, cursor))
+                 for view in page.aliases]
         if fmt == "json":
             out().print_json(data=[view.model_dump(mode="json") for view in views])
         else:
@@ -115,14 +110,8 @@ def aliases_audit(ctx: Context, fmt: str) -> None:
     from .. import render
 
     with edge():
-        events = []
-        cursor: str | None = None
-        while True:
-            page = ctx.board.alias_audit(cursor, PAGE)
-            events.extend(page.events)
-            cursor = page.next_cursor
-            if cursor is None:
-                break
+        events = [event for page in every_page(lambda cursor: ctx.board.alias_audit(cursor, PAGE))
+                  for event in page.events]
         if fmt == "json":
             out().print_json(data=[event.model_dump(mode="json") for event in events])
         else:

@@ -11,6 +11,7 @@ import click
 from .. import board_options
 from ..choices import MAX_COOLDOWN_S, RACE_TYPES, TIMING_METHODS
 from ..main import Context, edge, err, out, pass_context
+from ..target import every_page
 
 AUDIT_PAGE = 500
 FORMAT_HELP = "table for people, json for scripts (the README documents its fields)."
@@ -252,14 +253,8 @@ def audit(ctx: Context, board_id: str, fmt: str) -> None:
     from .. import render
 
     with edge():
-        events = []
-        cursor: str | None = None
-        while True:
-            page = ctx.board.audit(board_id, cursor, AUDIT_PAGE)
-            events.extend(page.events)
-            cursor = page.next_cursor
-            if cursor is None:
-                break
+        events = [event for page in every_page(lambda cursor: ctx.board.audit(board_id, cursor, AUDIT_PAGE))
+                  for event in page.events]
         if fmt == "json":
             out().print_json(data=[e.model_dump(mode="json") for e in events])
         else:
