@@ -135,14 +135,13 @@ def _push_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record],
 
     from .. import render
     from ..main import domain_exit_code, fail
+    from .standings import keep_standings
 
     if board_id:
         _check_batch(ctx, paths, records, board_id)
     where = board_id or "each run's track board"
     err().print(f"Pushing {len(records)} runs to {where}, one at a time; a run the board refuses "
                 "is named and the others still go.", soft_wrap=True)
-    from .standings import keep_standings
-
     refused: list[tuple[Path, DomainError]] = []
     pushed_to: list[str] = []
     for path, record in zip(paths, records, strict=True):
