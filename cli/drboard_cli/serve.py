@@ -63,7 +63,9 @@ from drboard_functions.errors import (
 )
 from drboard_functions.identity import LOCAL_ORGANISER, Caller, SignIn
 from drboard_functions.routes.app import CORS
-from drboard_functions.routes.standings import answer, header_values, standings_of, wanted
+from drboard_functions.routes.headers import header_values
+from drboard_functions.routes.kept import answer, wanted
+from drboard_functions.routes.standings import standings_of
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 from pydantic import ValidationError
@@ -333,7 +335,8 @@ class BoardServer:
                 "body": joined.model_dump_json(), "isBase64Encoded": False}
 
     def _join_page(self, event: dict[str, Any]) -> dict[str, Any]:
-        from drboard_functions.routes.responses import PAGE_HEADERS, page_policy
+        from drboard_functions.routes.headers import PAGE_HEADERS
+        from drboard_functions.routes.responses import page_policy
         from drboard_functions.web import join_page
 
         return {"statusCode": 200, "isBase64Encoded": False,

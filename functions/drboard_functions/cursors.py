@@ -11,6 +11,9 @@ from typing import Any
 
 from .errors import InvalidQuery
 
+#: The most entries, boards or seasons one page holds.
+MAX_PAGE = 500
+
 MAX_CURSOR_CHARS = 1024
 NOT_OURS = "the cursor is not one this board gave out"
 EXPORT_PARTS = ("entries", "submissions")

@@ -232,7 +232,7 @@ def test_the_api_is_throttled_logged_and_its_functions_reserved(
 
 def test_an_optional_cdn_keeps_only_what_the_board_says_and_passes_signed_calls_through(
         sam: dict[str, Any], cloudformation: dict[str, Any]) -> None:
-    from drboard_functions.routes.responses import PUBLIC_CACHE
+    from drboard_functions.routes.headers import PUBLIC_CACHE
 
     parameter = sam["Parameters"]["CdnDistribution"]
     assert (parameter["Default"], sorted(parameter["AllowedValues"])) == ("false", ["false", "true"])
@@ -380,7 +380,7 @@ def _invoke(kind: str, event_file: str, query: dict[str, str] | None = None) -> 
     as a fresh container would: the wiring reads the environment again."""
     from drboard_functions.handlers import admin, card, pull, push, wiring
 
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     handler = {"push": push, "pull": pull, "admin": admin, "card": card}[kind].lambda_handler
     event = json.loads((EVENTS / event_file).read_text())
     if query is not None:
@@ -572,8 +572,7 @@ def test_notify_announces_the_streams_entry_changes_with_its_template_environmen
         environment = _environment(cloudformation, "NotifyFunction", deployed)
         assert environment["BOARD_URL"].startswith("https://")
         _isolate(monkeypatch, environment)
-        wiring.service_from_environment.cache_clear()
-        wiring.notifier_from_environment.cache_clear()
+        wiring.forget()
         answer = notify.lambda_handler({"Records": records}, LocalContext())
         assert answer == {"batchItemFailures": []}
         (body,) = chat.bodies

@@ -49,7 +49,7 @@ def invoke(kind: str, sent: dict[str, Any]) -> dict[str, Any]:
     """Run a function's handler as a fresh container would."""
     from drboard_functions.handlers import admin, pull, push, wiring
 
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     handler = {"push": push, "pull": pull, "admin": admin}[kind].lambda_handler
     answer: dict[str, Any] = handler(sent, LocalContext())
     return answer

@@ -68,9 +68,14 @@ class Missing(MetaPathFinder):
 sys.meta_path.insert(0, Missing())
 handler = __import__("drboard_functions.handlers." + kind, fromlist=["lambda_handler"])
 imported = sorted(sys.modules)
+from functools import cache
 from drboard_functions.handlers import wiring
 from drboard_functions.services import sqlite_service
-wiring.service_from_environment = lambda: sqlite_service(Path(db))
+wiring.service_from_environment = cache(lambda: sqlite_service(Path(db)))
+def kept_pages():
+    from drboard_functions.routes.standings import standings_of
+    return standings_of(wiring.service_from_environment()).pages
+wiring.kept_pages_from_environment = kept_pages
 class Context:
     function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
     invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"

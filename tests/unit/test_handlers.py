@@ -30,6 +30,7 @@ from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
 
 from tests.awskit import REGION
+from tests.wiringkit import use_service
 
 EVENTS = Path(__file__).parents[2] / "events"
 PULL_EVENTS = ["pull_index.json", "pull_boards.json", "pull_board.json", "pull_racer.json",
@@ -63,7 +64,7 @@ def event_record() -> Record:
 def service(monkeypatch: pytest.MonkeyPatch) -> Iterator[LeaderboardService]:
     store = SqliteStore(":memory:")
     service = LeaderboardService(store)
-    monkeypatch.setattr(wiring, "service_from_environment", lambda: service)
+    use_service(monkeypatch, service)
     yield service
     store.close()
 
@@ -277,7 +278,7 @@ def test_the_handlers_run_on_dynamodb_and_s3(aws: None, monkeypatch: pytest.Monk
     s3.create_bucket(Bucket="archive", CreateBucketConfiguration={"LocationConstraint": REGION})
     monkeypatch.setenv("TABLE_NAME", "boards")
     monkeypatch.setenv("ARCHIVE_BUCKET", "archive")
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     try:
         assert wiring.service_from_environment() is wiring.service_from_environment()
         created = push.lambda_handler(load("push.json"), FakeLambdaContext())
@@ -292,7 +293,7 @@ def test_the_handlers_run_on_dynamodb_and_s3(aws: None, monkeypatch: pytest.Monk
         assert page["statusCode"] == 200
         assert [e["racer"] for e in json.loads(page["body"])["entries"]] == [record.racer]
     finally:
-        wiring.service_from_environment.cache_clear()
+        wiring.forget()
 
 
 # ---- signed in with Cognito: the same routes under /cognito, behind the JWT authorizer ----------

@@ -18,13 +18,14 @@ os.environ.setdefault("POWERTOOLS_TRACE_DISABLED", "true")
 from drboard_assembler import limits
 from drboard_cli.serve import LocalContext
 from drboard_functions.errors import SubmissionTooLarge
-from drboard_functions.handlers import admin, push, wiring
+from drboard_functions.handlers import admin, push
 from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 
 from tests.recordkit import make_record
 from tests.unit.test_handlers import load
+from tests.wiringkit import use_service
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 
@@ -38,7 +39,7 @@ HANDLERS = {"push": (push.lambda_handler, "push.json"),
 def service(monkeypatch: pytest.MonkeyPatch) -> Iterator[LeaderboardService]:
     store = SqliteStore(":memory:")
     service = LeaderboardService(store)
-    monkeypatch.setattr(wiring, "service_from_environment", lambda: service)
+    use_service(monkeypatch, service)
     yield service
     store.close()
 

@@ -51,7 +51,7 @@ from drboard_functions.routes import (
     pull_router,
     push_router,
 )
-from drboard_functions.routes.responses import PUBLIC_CACHE
+from drboard_functions.routes.headers import PUBLIC_CACHE
 from drboard_functions.service import LeaderboardService, default_board_id
 from drboard_functions.stores.sqlite import SqliteStore
 

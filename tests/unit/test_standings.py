@@ -26,8 +26,9 @@ from drboard_cli.serve import BoardServer, LocalContext
 from drboard_functions.handlers import pull, wiring
 from drboard_functions.models.domain import Entry
 from drboard_functions.routes import admin_router, build_app, pull_router, push_router
-from drboard_functions.routes.responses import PUBLIC_CACHE
-from drboard_functions.routes.standings import COUNTDOWN_REFRESH_S, Wanted, wanted
+from drboard_functions.routes.headers import PUBLIC_CACHE
+from drboard_functions.routes.kept import Wanted, wanted
+from drboard_functions.routes.standings import COUNTDOWN_REFRESH_S
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 from drboard_functions.web import Invite
@@ -35,6 +36,7 @@ from drboard_functions.web import Invite
 from tests.awskit import REGION
 from tests.recordkit import make_record
 from tests.unit.test_routes import T0, TRACK, Client, Clock, body, cup_spec, lap
+from tests.wiringkit import use_service
 
 pytestmark = pytest.mark.filterwarnings("ignore:No application metrics to publish")
 EVENTS = Path(__file__).parents[2] / "events"
@@ -285,7 +287,7 @@ def event(name: str) -> dict[str, Any]:
 def test_the_pull_function_answers_kept_bytes_on_sqlite(monkeypatch: pytest.MonkeyPatch,
                                                        store: CountingStore) -> None:
     service = LeaderboardService(store)
-    monkeypatch.setattr(wiring, "service_from_environment", lambda: service)
+    use_service(monkeypatch, service)
     service.push(make_record("Ada", laps=lap(12000)))
     first = pull.lambda_handler(event("pull_board.json"), LocalContext())
     store.calls.clear()
@@ -301,7 +303,7 @@ def test_the_pull_function_reads_one_board_item_per_kept_answer_on_dynamodb(
     tablekit.create_board_table(boto3.client("dynamodb", region_name=REGION), "boards")
     monkeypatch.setenv("TABLE_NAME", "boards")
     monkeypatch.delenv("ARCHIVE_BUCKET", raising=False)
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     try:
         service = wiring.service_from_environment()
         calls: list[str] = []
@@ -311,7 +313,12 @@ def test_the_pull_function_reads_one_board_item_per_kept_answer_on_dynamodb(
         first = pull.lambda_handler(event("pull_board.json"), LocalContext())
         calls.clear()
         again = pull.lambda_handler(event("pull_board.json"), LocalContext())
-        assert again["body"] == first["body"] and calls == ["GetItem"]
+        # The page kept in the table, with the board's version, in one read; from then on this
+        # container holds it and reads the version alone.
+        assert again["body"] == first["body"] and calls == ["BatchGetItem"]
+        calls.clear()
+        assert pull.lambda_handler(event("pull_board.json"), LocalContext())["body"] == first["body"]
+        assert calls == ["GetItem"]
         etag = first["headers"]["ETag"]
         held = pull.lambda_handler(event("pull_board.json") | {"headers": {"if-none-match": etag}},
                                    LocalContext())
@@ -319,7 +326,7 @@ def test_the_pull_function_reads_one_board_item_per_kept_answer_on_dynamodb(
         service.push(make_record("Bob", laps=lap(11000)))
         assert racers(pull.lambda_handler(event("pull_board.json"), LocalContext())) == ["Bob", "Ada"]
     finally:
-        wiring.service_from_environment.cache_clear()
+        wiring.forget()
 
 
 # ---- drboard serve ------------------------------------------------------------------------------

@@ -35,6 +35,7 @@ from samtranslator.yaml_helper import yaml_parse
 
 from tests.awskit import REGION
 from tests.tablekit import create_board_table
+from tests.wiringkit import use_service
 
 ROOT = Path(__file__).parents[2]
 
@@ -129,9 +130,9 @@ def cloud(aws: None, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Any, Any
     s3.create_bucket(Bucket="archive", CreateBucketConfiguration={"LocationConstraint": REGION})
     monkeypatch.setenv("TABLE_NAME", "boards")
     monkeypatch.setenv("ARCHIVE_BUCKET", "archive")
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     yield db, s3
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
 
 
 def push_event() -> dict[str, Any]:
@@ -211,7 +212,7 @@ def test_a_push_whose_archive_fails_answers_503_and_stores_nothing(
         cloud: tuple[Any, Any], monkeypatch: pytest.MonkeyPatch) -> None:
     db, s3 = cloud
     monkeypatch.setenv("ARCHIVE_BUCKET", "no-such-bucket")
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     answer = push_event()
     assert answer["statusCode"] == 503, answer["body"]
     assert json.loads(answer["body"])["error"] == "StoreUnavailable"
@@ -219,7 +220,7 @@ def test_a_push_whose_archive_fails_answers_503_and_stores_nothing(
     assert not [i for i in stored_items(db) if i["sk"]["S"].startswith(("S#", "R#", "D#"))]
 
     monkeypatch.setenv("ARCHIVE_BUCKET", "archive")  # the bucket is back: the retry stores it
-    wiring.service_from_environment.cache_clear()
+    wiring.forget()
     assert push_event()["statusCode"] == 201
     record = Record.model_validate_json(load("push.json")["body"])
     archived = s3.get_object(Bucket="archive", Key=S3Archive.key(record.track, record.submission_id))
@@ -248,7 +249,7 @@ def test_a_locked_sqlite_board_answers_503(tmp_path: Path, monkeypatch: pytest.M
     monkeypatch.setattr(sqlite, "BUSY_TIMEOUT_S", 0.05)
     path = tmp_path / "board.db"
     service = LeaderboardService(SqliteStore(path))
-    monkeypatch.setattr(wiring, "service_from_environment", lambda: service)
+    use_service(monkeypatch, service)
     other = sqlite3.connect(path, isolation_level=None)
     other.execute("BEGIN IMMEDIATE")  # another process is writing, and keeps at it
     try:

@@ -1,5 +1,9 @@
 """POST /boards/{board}/submissions, GET /me, PUT /me/alias: the racer-owned routes
-(signed in the cloud)."""
+(signed in the cloud).
+
+A push that stores a run renders its board's standings (the JSON of the top pages racers ask
+for most) for the board version it made and keeps them in the table, so the pull function
+answers them from one read, cold or warm, without rendering them (see ``routes.standings``)."""
 
 from __future__ import annotations
 
@@ -12,7 +16,11 @@ from aws_lambda_powertools.logging import correlation_paths
 from aws_lambda_powertools.metrics import MetricUnit
 from aws_lambda_powertools.utilities.typing import LambdaContext
 
+from ..errors import DomainError
 from ..routes import build_app, canonical_event, push_router
+from ..routes.kept import PUSHED_LIMITS, Wanted
+from ..routes.params import segment
+from ..routes.standings import standings_of
 from . import wiring
 
 logger = Logger()
@@ -33,8 +41,23 @@ def count_submissions(app: APIGatewayHttpResolver, next_middleware: NextMiddlewa
     return response
 
 
+def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
+    """After a run is stored, its board's standings as of the version it made, kept for the
+    pull function (a page that could not be kept is rendered by its first reader instead)."""
+    response = next_middleware(app)
+    board = app.context.get("_route_args", {}).get("board")
+    if app.current_event.http_method == "POST" and response.status_code == 201 and board:
+        standings = standings_of(app.context["service"])
+        try:
+            for limit in PUSHED_LIMITS:
+                standings.copy(Wanted(segment(board), "json", limit))
+        except DomainError as error:
+            logger.warning("StandingsNotKept", extra={"board": board, "error": str(error)})
+    return response
+
+
 app = build_app(push_router)
-app.use(middlewares=[count_submissions])
+app.use(middlewares=[count_submissions, keep_standings])
 
 
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)

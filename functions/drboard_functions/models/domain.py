@@ -8,13 +8,11 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, TypeVar
 from drboard_assembler.record import Conditions, RaceType
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
+from ..cursors import MAX_PAGE as MAX_PAGE  # the bound of pages, kept with their cursors
 from ..display import design_known
 
 if TYPE_CHECKING:
     from .views import BoardView
-
-
-MAX_PAGE = 500
 
 
 MAX_COOLDOWN_S = 7 * 24 * 3600

@@ -45,6 +45,7 @@ if TYPE_CHECKING:
         status_of,
         unreadable,
     )
+    from .headers import page_etag
     from .openapi import openapi_document
     from .params import (
         ADMIN_TAG,
@@ -57,7 +58,7 @@ if TYPE_CHECKING:
         pull_router,
         push_router,
     )
-    from .responses import ErrorBody, FieldProblem, page_etag
+    from .responses import ErrorBody, FieldProblem
 
 __all__ = [
     "ADMIN_TAG",
@@ -94,7 +95,7 @@ _HOMES = {"COGNITO_PREFIX": "app", "ERROR_STATUS": "app", "BoardResolver": "app"
           "status_of": "app", "unreadable": "app", "openapi_document": "openapi",
           "ADMIN_TAG": "params", "IMPORT_BODY": "params", "MAX_BOARD_BODY_BYTES": "params",
           "RequestBody": "params", "bounded_json": "params", "ErrorBody": "responses",
-          "FieldProblem": "responses", "page_etag": "responses"}
+          "FieldProblem": "responses", "page_etag": "headers"}
 
 
 def __getattr__(name: str) -> Any:

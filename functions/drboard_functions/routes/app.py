@@ -73,16 +73,22 @@ from ..errors import (
     WebhookNotFound,
 )
 from ..identity import caller_from_event
-from ..service import LeaderboardService
+from .headers import (
+    CORS_HEADERS,
+    CORS_MAX_AGE_S,
+    CORS_ORIGIN,
+    PUBLIC_CACHE,
+    api_version,
+    body_etag,
+    names_etag,
+)
 from .params import ADMIN_TAG, SIGV4, RequestBody, bounded_json, route_body
-from .responses import PUBLIC_CACHE, ErrorBody, api_version, body_etag, names_etag, page_answer
-from .standings import answer, origin_of, standings_of, wanted
+from .responses import ErrorBody, page_answer
 
 if TYPE_CHECKING:  # Powertools' OpenAPI models: only generating the document needs them
     from aws_lambda_powertools.event_handler.openapi.models import SecurityScheme
     from aws_lambda_powertools.utilities.typing import LambdaContext
 
-    from .. import web
 
 
 TITLE = "drboard"
@@ -255,18 +261,15 @@ class BoardResolver(APIGatewayHttpResolver):
     An organiser route refuses a caller who does not organise before it validates anything, so
     a racer learns nothing of its body's fields (403, not 422).
 
-    A board's top page whose copy is kept for the board's version now is answered before any of
-    that (see :mod:`.standings`): one read of the version, and the copy's bytes. Every public
-    read's answer (a GET route that is neither signed nor an organiser's) carries the CDN's
-    Cache-Control and an ETag, and answers 304 to an If-None-Match naming it."""
+    A board's top page whose copy is kept for the board's version now is answered before the
+    resolver, by the edge (the pull function, ``drboard serve``: see :mod:`.kept`); the route
+    renders the others and keeps them (:mod:`.standings`). Every public read's answer (a GET
+    route that is neither signed nor an organiser's) carries the CDN's Cache-Control and an
+    ETag, and answers 304 to an If-None-Match naming it."""
 
     _public_read = False
 
     def resolve(self, event: Mapping[str, Any], context: LambdaContext) -> dict[str, Any]:
-        kept = self._kept_answer(event)
-        if kept is not None:
-            self.clear_context()
-            return kept
         problem = unreadable(event)
         if problem is not None:
             return refusal(problem)
@@ -275,36 +278,6 @@ class BoardResolver(APIGatewayHttpResolver):
         if self._public_read:
             return public_answer(answer, (event.get("headers") or {}).get("if-none-match"))
         return answer
-
-    def _kept_answer(self, event: Mapping[str, Any]) -> dict[str, Any] | None:
-        """A kept copy's answer to the request, if it asks for one that is kept and current."""
-        if event.get("body"):
-            return None
-        method = ((event.get("requestContext") or {}).get("http") or {}).get("method", "")
-        page = wanted(method, str(event.get("rawPath") or ""), str(event.get("rawQueryString") or ""))
-        service = self.context.get("service")
-        if page is None or not isinstance(service, LeaderboardService):
-            return None
-        headers: Mapping[str, str] = event.get("headers") or {}
-        invite = self._invite(event) if page.html else None
-        copy = standings_of(service).kept(page, invite)
-        if copy is None:
-            return None
-        kept = answer(copy, headers.get("if-none-match"))
-        origin = headers.get("origin")
-        return {"statusCode": int(kept.status), "body": kept.text, "isBase64Encoded": False,
-                "headers": kept.headers | CORS.to_dict(CORS.allowed_origin(origin)) if origin
-                else kept.headers, "cookies": []}
-
-    def _invite(self, event: Mapping[str, Any]) -> web.Invite:
-        from .. import web  # only a page asks how racers join
-
-        given = self.context.get("invite")
-        invite = given() if callable(given) else None
-        if isinstance(invite, web.Invite):
-            return invite
-        return web.Invite(endpoint=origin_of(event.get("headers") or {},
-                                             (event.get("requestContext") or {}).get("domainName")))
 
     def _call_route(self, route: Any, route_arguments: dict[str, str]) -> Any:
         self._public_read = (route.method == "GET" and not route.security
@@ -382,8 +355,9 @@ def settle_annotations(func: Callable[..., Any]) -> None:
                 settle_annotations(meta.dependency)
 
 
-#: The reads' CORS headers (the signed routes set ``cors=False``); answered by kept copies too.
-CORS = CORSConfig(allow_origin="*", allow_headers=["Content-Type"], max_age=600)
+#: The reads' CORS headers (the signed routes set ``cors=False``); kept copies answer the same
+#: (``headers.READ_CORS``).
+CORS = CORSConfig(allow_origin=CORS_ORIGIN, allow_headers=list(CORS_HEADERS), max_age=CORS_MAX_AGE_S)
 
 
 def build_app(*routers: Router) -> BoardResolver:

@@ -15,6 +15,8 @@ from ..identity import SignIn
 from ..models.views import BoardList, BoardPage, Comparison, Insights, RacerHistory, RacerSummary, RacerView
 from ..service import DEFAULT_TOP
 from ..views import page_tag
+from .headers import etag_headers, names_etag, page_etag
+from .kept import Wanted, answer
 from .params import (
     DEFAULT_LIMIT,
     BoardId,
@@ -30,8 +32,8 @@ from .params import (
     pull_router,
     segment,
 )
-from .responses import BAD_PATH, error_response, etag_headers, json_response, names_etag, page_etag
-from .standings import Wanted, answer, standings_of
+from .responses import BAD_PATH, error_response, json_response
+from .standings import standings_of
 
 
 @pull_router.get(

@@ -15,8 +15,9 @@ from typing import Any
 
 from aws_lambda_powertools.event_handler import Response
 
+from .headers import api_version
 from .params import BoardId, IfNoneMatch, RacerAlias, SeasonId, Service, card_router, segment
-from .responses import BAD_PATH, api_version, error_response
+from .responses import BAD_PATH, error_response
 
 SVG = "image/svg+xml"
 PNG = "image/png"

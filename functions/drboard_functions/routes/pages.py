@@ -16,6 +16,8 @@ from ..errors import BoardNotFound
 from ..models.domain import MAX_PAGE
 from ..service import DEFAULT_TOP
 from ..views import page_tag
+from .headers import etag_headers, names_etag, page_etag
+from .kept import Kind, Wanted, answer
 from .params import (
     DEFAULT_LIMIT,
     BoardId,
@@ -31,16 +33,8 @@ from .params import (
     pull_router,
     segment,
 )
-from .responses import (
-    PAGE_RESPONSE,
-    error_response,
-    etag_headers,
-    names_etag,
-    page_answer,
-    page_etag,
-    page_policy,
-)
-from .standings import Kind, Wanted, answer, standings_of
+from .responses import PAGE_RESPONSE, error_response, page_answer, page_policy
+from .standings import standings_of
 
 
 @pull_router.get("/", summary="The boards' web page", tags=["pages"],

@@ -35,7 +35,7 @@ from ..errors import (
 from ..identity import Caller, SignIn, caller_from_event
 from ..models.domain import MAX_PAGE
 from ..service import MAX_COMPARED, MAX_TOP, LeaderboardService
-from .standings import origin_of
+from .headers import origin_of
 
 DEFAULT_LIMIT = 100
 MAX_PATH_PARAM_CHARS = 256  # a board id or a racer alias, percent-encoded

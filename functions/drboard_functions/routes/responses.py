@@ -1,35 +1,19 @@
-"""What the routes answer: the error body, the OpenAPI descriptions of answers, JSON and HTML
-answers, and the ETag of a board's page."""
+"""What the routes answer: the error body, the OpenAPI descriptions of answers, and JSON and
+HTML answers (their headers and ETags: :mod:`.headers`)."""
 
 from __future__ import annotations
 
-import hashlib
 from http import HTTPStatus
 from typing import TYPE_CHECKING, Any
 
 from aws_lambda_powertools.event_handler import Response, content_types
 from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
-from drboard_assembler import __version__ as assembler_version
 from pydantic import BaseModel, ConfigDict, Field
+
+from .headers import HTML, PAGE_HEADERS
 
 if TYPE_CHECKING:
     from .params import RequestBody
-
-HTML = "text/html; charset=utf-8"
-#: Every page's headers; its Content-Security-Policy comes from :func:`page_answer` (the pages
-#: load nothing and run no script but their own inlined style and script, allowed by hash).
-PAGE_HEADERS = {
-    "X-Content-Type-Options": "nosniff",
-    "Cache-Control": "no-store",
-}
-
-
-def api_version() -> str:
-    """The distribution's version, as its packages write it out (tests/unit/test_openapi.py holds
-    it equal to the installed distribution's): a Lambda bundle has no metadata to read, and
-    looking for it costs a cold start more than the rest of building the resolver."""
-    return assembler_version
-
 
 # ---- response and error models --------------------------------------------------------------
 
@@ -108,33 +92,3 @@ def page_policy(*, live: bool = False) -> dict[str, str]:
     from ..web import content_security_policy
 
     return {"Content-Security-Policy": content_security_policy(live=live)}
-
-
-def page_etag(tag: str, limit: int, cursor: str | None) -> str:
-    """The ETag of one page of a board: the board's page tag, the page asked for, and the API's
-    version (a new release may answer differently)."""
-    query = hashlib.sha256(f"{limit}|{cursor or ''}".encode()).hexdigest()[:12]
-    return f'"{api_version()}.{tag}.{query}"'
-
-
-#: The Cache-Control of every public read's answer (and of no signed or organiser one): a CDN or
-#: a browser may keep it two seconds, and answer it two more while it asks again, so a page that
-#: changes with every push is at most a few seconds behind; errors are never kept. Viewers who
-#: poll every two seconds cost the board one request per CDN location per two seconds.
-PUBLIC_CACHE = "public, max-age=2, stale-while-revalidate=2"
-
-
-def etag_headers(etag: str) -> dict[str, str]:
-    return {"ETag": etag, "Cache-Control": PUBLIC_CACHE}
-
-
-def body_etag(body: str) -> str:
-    """The ETag of a public answer that has none of its own: its body's digest."""
-    return '"' + hashlib.sha256(body.encode("utf-8")).hexdigest()[:24] + '"'
-
-
-def names_etag(if_none_match: str | None, etag: str) -> bool:
-    """Whether an If-None-Match names the ETag (weakly: a CDN that compresses an answer hands its
-    ETag on as ``W/"..."``)."""
-    return bool(if_none_match) and any(
-        tag.strip().removeprefix("W/") == etag for tag in str(if_none_match).split(","))

@@ -29,6 +29,7 @@ from .boards import BoardKeeper, Clock, racer_key, utc_now
 if TYPE_CHECKING:
     from ..models.notices import EntryChange
     from ..stores.base import BoardStore, RecordArchive
+    from ..stores.pages import PageShelf
     from .aliases import Aliases
     from .copies import evaluation_fingerprints
     from .managing import Managing
@@ -223,6 +224,12 @@ class LeaderboardService:
     webhooks = _handed_to("_webhooks", Webhooks.webhooks)
     remove_webhook = _handed_to("_webhooks", Webhooks.remove_webhook)
     test_webhook = _handed_to("_webhooks", Webhooks.test_webhook)
+
+    @property
+    def page_shelf(self) -> PageShelf | None:
+        """Where the store keeps boards' pages as bytes, for every process reading the board
+        (None: each process keeps its own; see ``routes.standings``)."""
+        return self.store.pages
 
     def listen(self, listener: Callable[[EntryChange], None] | None) -> None:
         """Tell ``listener`` of every entry a push improves, as it happens (None: no one)."""

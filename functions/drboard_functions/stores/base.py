@@ -27,6 +27,7 @@ from ..models.domain import (
 if TYPE_CHECKING:  # the chat's webhooks and the seasons load with the stores' code that reads them
     from ..models.notices import Webhook
     from ..models.seasons import RoundResults, Season, SeasonLink
+    from .pages import PageShelf
 
 
 class StoredBoard(NamedTuple):
@@ -272,6 +273,11 @@ def delivered(webhook: Webhook, at: datetime, error: str | None) -> Webhook:
 
 
 class BoardStore(NoticeStore, Protocol):
+    @property
+    def pages(self) -> PageShelf | None:
+        """Where the store keeps boards' pages as the bytes that answer them (None: it keeps
+        none; the processes that read its boards keep their own)."""
+
     def get_board(self, board_id: str) -> StoredBoard | None:
         """The board and its number of racers, or None."""
 

@@ -69,6 +69,7 @@ from .sqlite_seasons import SEASON_SCHEMA, SqliteSeasons
 
 if TYPE_CHECKING:
     from ..models.notices import Webhook
+    from .pages import PageShelf
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS boards (
@@ -185,6 +186,10 @@ class SqliteStore(SqliteSeasons):
     """One SQLite connection per thread that uses the store (WAL: readers run alongside the one
     writer; writers take turns through BEGIN IMMEDIATE). ``:memory:`` is one database per
     connection, so that board keeps a single connection for every thread."""
+
+    #: Pages are kept by the processes that read the file (and by `drboard pull`, beside it:
+    #: ``sqlite_standings``): each has the file's version in one read of its own.
+    pages: PageShelf | None = None
 
     def __init__(self, path: Path | str) -> None:
         self.path = str(path)

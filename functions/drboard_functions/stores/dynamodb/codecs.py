@@ -21,6 +21,8 @@ Items of a board share its partition (``board``); the sort key ``sk`` tells them
 - ``#RANK#<generation>#<node>``: the counts of entries by score (see ``ranks.py``);
 - ``#SEASON#<season_id>``: the board's link to a season (see ``seasons.py``, which also keeps
   the seasons themselves in partitions of their own).
+- In a partition of its own, ``#PAGE#<board_id>``: the board's pages kept as the bytes that
+  answer them, each labelled with the board version it shows (see ``pages.py``).
 
 - ``K#<skeleton>``: an alias's confusable skeleton on the board, and the racer (``racer_key``)
   who holds it: a lookalike alias under another racer fails the push transaction;
@@ -62,12 +64,17 @@ from ...models.domain import (
 )
 from ..base import StoredBoard
 
+# The keys that need no model live in keys.py (the pull function reads kept pages with them
+# alone); the other modules take them from here with the rest of the layout.
+from .keys import BOARD_SK as BOARD_SK
+from .keys import key as key
+from .keys import text as text
+
 if TYPE_CHECKING:
     from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef
 
     Item = dict[str, AttributeValueTypeDef]
 
-BOARD_SK = "#BOARD"
 ALIAS_PARTITION = "#ALIAS"
 EVENT_PARTITION = "#EVENT"
 BANS_SK = "#BANS"
@@ -128,14 +135,6 @@ def audit_sk(event_id: str) -> str:
 
 def counter_sk(generation: str, node: str) -> str:
     return f"#RANK#{generation}#{node}"
-
-
-def text(value: str) -> AttributeValueTypeDef:
-    return {"S": value}
-
-
-def key(board_id: str, sk: str) -> dict[str, AttributeValueTypeDef]:
-    return {"board": text(board_id), "sk": text(sk)}
 
 
 # ---- items -----------------------------------------------------------------------------------

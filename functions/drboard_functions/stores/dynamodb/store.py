@@ -98,6 +98,7 @@ from .codecs import (
     tally_sk,
     text,
 )
+from .pages import DynamoDbPageShelf
 from .ranks import FIRST_GENERATION, RankCounters
 from .retries import MAX_ATTEMPTS, backoff
 from .seasons import DynamoDbSeasons
@@ -130,6 +131,7 @@ class DynamoDbStore(DynamoDbSeasons):
         self.table = table_name
         self.client: DynamoDBClient = client if client is not None else boto3.client("dynamodb")
         self.ranks = RankCounters(self.client, table_name)
+        self.pages: DynamoDbPageShelf = DynamoDbPageShelf(self.client, table_name)
 
     # ---- boards ---------------------------------------------------------------------------
 
@@ -140,12 +142,7 @@ class DynamoDbStore(DynamoDbSeasons):
     def board_version(self, board_id: str) -> int | None:
         # A consistent read of two small attributes (one read unit: the board item is under
         # 4 KB): a copy kept for the version it reads is never older than the last write.
-        item = self.client.get_item(TableName=self.table, ConsistentRead=True,
-                                    Key=key(board_id, BOARD_SK),
-                                    ProjectionExpression="sk, board_version").get("Item")
-        if not item:
-            return None
-        return int(item.get("board_version", {"N": "0"})["N"])
+        return self.pages.version(board_id)
 
     def create_board(self, board: Board) -> StoredBoard:
         try:
