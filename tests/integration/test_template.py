@@ -429,7 +429,7 @@ def test_pull_works_with_its_template_environment_and_permissions(
     assert not any(action.startswith(("s3:", "dynamodb:Update", "dynamodb:Delete"))
                    for action, _ in granted), "the pull function only reads"
     assert pull_writes(cloudformation) == [{"ForAllValues:StringLike": {
-        "dynamodb:LeadingKeys": ["#RESULTS#*"]}}], "but for the results a season keeps"
+        "dynamodb:LeadingKeys": ["#RESULTS#*", "#PAGE#*"]}}], "but for kept results and pages"
 
 
 def test_admin_works_with_its_template_environment_and_permissions(

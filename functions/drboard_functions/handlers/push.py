@@ -18,7 +18,7 @@ from aws_lambda_powertools.utilities.typing import LambdaContext
 
 from ..errors import DomainError
 from ..routes import build_app, canonical_event, push_router
-from ..routes.kept import PUSHED_LIMITS, Wanted
+from ..routes.kept import PUSHED_LIMITS
 from ..routes.params import segment
 from ..routes.standings import standings_of
 from . import wiring
@@ -47,10 +47,8 @@ def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware)
     response = next_middleware(app)
     board = app.context.get("_route_args", {}).get("board")
     if app.current_event.http_method == "POST" and response.status_code == 201 and board:
-        standings = standings_of(app.context["service"])
         try:
-            for limit in PUSHED_LIMITS:
-                standings.copy(Wanted(segment(board), "json", limit))
+            standings_of(app.context["service"]).renew(segment(board), PUSHED_LIMITS)
         except DomainError as error:
             logger.warning("StandingsNotKept", extra={"board": board, "error": str(error)})
     return response

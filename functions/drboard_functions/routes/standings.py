@@ -101,14 +101,18 @@ class Standings:
                 self._rendering.pop(name, None)
         return copy
 
+    def renew(self, board_id: str, limits: Sequence[int]) -> None:
+        """Render the board's JSON pages of these sizes as it is now, from one read, and keep
+        them (what a push that changed the board does)."""
+        now = self.service.clock()
+        for limit, page in zip(limits, self.service.board_pages(board_id, limits), strict=True):
+            self.pages.keep(Wanted(board_id, "json", limit), "", _json_copy(page, limit, now))
+
     def _render(self, wanted: Wanted, invite: Invite | None) -> Copy:
         page = self.service.board_page(wanted.board_id, limit=wanted.limit, cursor=None)
         now = self.service.clock()
         if not wanted.html:
-            etag = page_etag(page_tag(page.board), wanted.limit, None)
-            cache = etag_headers(etag)
-            return page_copy(page.board.version, fresh_until(page.board, now, countdown=False),
-                             etag, page.model_dump_json(), {"Content-Type": JSON} | cache, cache)
+            return _json_copy(page, wanted.limit, now)
         assert invite is not None
         etag = page_etag(f"{wanted.kind}.{page_tag(page.board)}", wanted.limit, None)
         html = _board_html(page, etag, invite, screen=wanted.kind == "screen", now=now,
@@ -116,6 +120,13 @@ class Standings:
         headers = {"Content-Type": HTML} | PAGE_HEADERS | page_policy(live=True) | etag_headers(etag)
         return page_copy(page.board.version, fresh_until(page.board, now, countdown=True), etag,
                          html, headers, headers)
+
+
+def _json_copy(page: BoardPage, limit: int, now: datetime) -> Copy:
+    etag = page_etag(page_tag(page.board), limit, None)
+    cache = etag_headers(etag)
+    return page_copy(page.board.version, fresh_until(page.board, now, countdown=False), etag,
+                     page.model_dump_json(), {"Content-Type": JSON} | cache, cache)
 
 
 def _address(invite: Invite | None) -> str:

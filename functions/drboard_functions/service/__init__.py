@@ -167,6 +167,7 @@ class LeaderboardService:
     boards = _handed_to("_reading", Reading.boards)
     boards_page = _handed_to("_reading", Reading.boards_page)
     board_page = _handed_to("_reading", Reading.board_page)
+    board_pages = _handed_to("_reading", Reading.board_pages)
     board_tag = _handed_to("_reading", Reading.board_tag)
     board_version = _handed_to("_reading", Reading.board_version)
     racer = _handed_to("_reading", Reading.racer)

@@ -74,13 +74,22 @@ class Reading:
         check_limit(limit)
         after = RankCursor.decode(cursor) if cursor else None
         if after is None:
-            found, entries = self.store.front_page(board_id, limit)
-            stored = live(board_id, found)
-            leader = entries[0] if entries else None
-        else:
-            stored = self.keeper.require(board_id)
-            entries = self.store.top(board_id, limit, after.rank_key)
-            leader = self.keeper.leader(board_id)
+            return self.board_pages(board_id, [limit])[0]
+        stored = self.keeper.require(board_id)
+        entries = self.store.top(board_id, limit, after.rank_key)
+        return self._page(stored, entries, limit, after, self.keeper.leader(board_id))
+
+    def board_pages(self, board_id: str, limits: Sequence[int]) -> list[BoardPage]:
+        """The board's top pages of these sizes, from one read of the largest."""
+        for limit in limits:
+            check_limit(limit)
+        found, entries = self.store.front_page(board_id, max(limits))
+        stored = live(board_id, found)
+        leader = entries[0] if entries else None
+        return [self._page(stored, entries[:limit], limit, None, leader) for limit in limits]
+
+    def _page(self, stored: StoredBoard, entries: Sequence[Entry], limit: int,
+              after: RankCursor | None, leader: Entry | None) -> BoardPage:
         views: list[EntryView] = []
         shown = stored.board.designs_shown(self.clock())
         previous = after

@@ -145,16 +145,17 @@ class DynamoDbStore(DynamoDbSeasons):
         return self.pages.version(board_id)
 
     def create_board(self, board: Board) -> StoredBoard:
+        item = board_item(board) | {"rank_generation": text(FIRST_GENERATION)}
         try:
-            self.client.put_item(
-                TableName=self.table, ConditionExpression="attribute_not_exists(sk)",
-                Item=board_item(board) | {"rank_generation": text(FIRST_GENERATION)})
+            self.client.put_item(TableName=self.table, Item=item,
+                                 ConditionExpression="attribute_not_exists(sk)")
         except ClientError as error:
             if code_of(error) != "ConditionalCheckFailedException":
                 raise
-        stored = self.get_board(board.board_id)
-        assert stored is not None
-        return stored
+            stored = self.get_board(board.board_id)  # another push made it first
+            assert stored is not None
+            return stored
+        return stored_board(item)
 
     def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
         condition = "attribute_exists(sk)"
