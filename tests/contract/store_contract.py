@@ -27,6 +27,7 @@ from drboard_functions.models.domain import (
     Board,
     BoardRules,
     Entry,
+    EventBans,
     RacerTally,
     Submission,
     SubmissionLimits,
@@ -210,6 +211,17 @@ class StoreContract(SeasonStoreContract):
         assert store.get_entry(TRACK, "ada") == first.entry
         assert participants(store) == 1
         assert [s.submitted_at for s in store.history("ada")] == [at(1)]
+
+    def test_a_pushs_first_read_gives_the_events_bans_and_the_submission(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(12000))
+        assert store.bans_and_submission(TRACK, "ada", record.submission_id) == (EventBans(), 0, None)
+        stored = submit(store, record, at(1))
+        version = store.save_event_bans(EventBans(racers=["bob"]), 0)
+        bans, bans_version, submission = store.bans_and_submission(TRACK, "ada", record.submission_id)
+        assert (bans, bans_version) == (EventBans(racers=["bob"]), version) == store.event_bans()
+        assert submission == store.get_submission(TRACK, "ada", record.submission_id)
+        assert submission is not None and submission.submitted_at == stored.entry.achieved_at
+        assert store.bans_and_submission(TRACK, "bob", record.submission_id)[2] is None
 
     def test_duplicate_of_an_older_submission_keeps_the_best(self, store: BoardStore) -> None:
         slow, fast = make_record("Ada", lap(13000)), make_record("Ada", lap(12000))

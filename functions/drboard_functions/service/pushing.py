@@ -97,9 +97,9 @@ class Pushing:
             # The board as just read for the first check; read again when it changed meanwhile.
             stored_board = found if attempt == 0 else self.keeper.require(board_id)
             board = stored_board.board
-            bans, bans_version = self.store.event_bans()
+            bans, bans_version, stored = self.store.bans_and_submission(board_id, key,
+                                                                        record.submission_id)
             check_not_banned(board, bans, record.racer, caller)
-            stored = self.store.get_submission(board_id, key, record.submission_id)
             if stored is not None:
                 return self._duplicate_receipt(stored, record.racer)
             check_open(board, now)

@@ -327,6 +327,11 @@ class BoardStore(NoticeStore, Protocol):
     def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
         """One submission of the racer on the board."""
 
+    def bans_and_submission(self, board_id: str, racer_key: str,
+                            submission_id: str) -> tuple[EventBans, int, Submission | None]:
+        """The event's bans and their version, and one submission of the racer on the board (a
+        push's first checks), in one read where the store can."""
+
     def tally(self, board_id: str, racer_key: str) -> RacerTally:
         """How many submissions the racer made on the board, and when the last one was."""
 

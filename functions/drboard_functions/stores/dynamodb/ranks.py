@@ -106,6 +106,12 @@ class RankCounters:
         # A board's rank generation, once set, never changes: it is safe to remember.
         self._generations: dict[str, str] = {}
 
+    def note(self, board_id: str, item: Item) -> None:
+        """Remember the generation a board item read for another reason shows (a later
+        ``state`` then reads nothing)."""
+        if "rank_generation" in item:
+            self._generations[board_id] = item["rank_generation"]["S"]
+
     def state(self, board_id: str) -> RankState:
         """The board's rank counters (read, unless the board's generation is known)."""
         if board_id in self._generations:

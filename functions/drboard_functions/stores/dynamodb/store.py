@@ -137,7 +137,10 @@ class DynamoDbStore(DynamoDbSeasons):
 
     def get_board(self, board_id: str) -> StoredBoard | None:
         item = self.get_item(board_id, BOARD_SK)
-        return stored_board(item) if item else None
+        if not item:
+            return None
+        self.ranks.note(board_id, item)
+        return stored_board(item)
 
     def board_version(self, board_id: str) -> int | None:
         # A consistent read of two small attributes (one read unit: the board item is under
@@ -155,6 +158,7 @@ class DynamoDbStore(DynamoDbSeasons):
             stored = self.get_board(board.board_id)  # another push made it first
             assert stored is not None
             return stored
+        self.ranks.note(board.board_id, item)
         return stored_board(item)
 
     def update_board(self, board: Board, *, only_if_empty: bool = False) -> StoredBoard:
@@ -358,10 +362,19 @@ class DynamoDbStore(DynamoDbSeasons):
     # ---- event-wide bans ------------------------------------------------------------------
 
     def event_bans(self) -> tuple[EventBans, int]:
-        item = self.get_item(EVENT_PARTITION, BANS_SK)
-        if item is None:
-            return EventBans(), 0
-        return EventBans.model_validate_json(item["data"]["S"]), int(item["version"]["N"])
+        return _bans(self.get_item(EVENT_PARTITION, BANS_SK))
+
+    def bans_and_submission(self, board_id: str, racer_key: str,
+                            submission_id: str) -> tuple[EventBans, int, Submission | None]:
+        wanted = [key(EVENT_PARTITION, BANS_SK), key(board_id, submission_sk(racer_key, submission_id))]
+        answer = self.client.batch_get_item(RequestItems={self.table: {"Keys": wanted,
+                                                                       "ConsistentRead": True}})
+        if answer.get("UnprocessedKeys"):  # throttled: one read at a time
+            return (*self.event_bans(), self.get_submission(board_id, racer_key, submission_id))
+        items = {item["board"]["S"]: item for item in answer.get("Responses", {}).get(self.table, [])}
+        bans, version = _bans(items.get(EVENT_PARTITION))
+        submission = items.get(board_id)
+        return bans, version, submission_of(submission) if submission else None
 
     def save_event_bans(self, bans: EventBans, version: int) -> int:
         condition, values = bans_condition(version)
@@ -799,3 +812,7 @@ class DynamoDbStore(DynamoDbSeasons):
         return [item for page in self._pages(request, limit) for item in page["Items"]]
 
 
+def _bans(item: Item | None) -> tuple[EventBans, int]:
+    if item is None:
+        return EventBans(), 0
+    return EventBans.model_validate_json(item["data"]["S"]), int(item["version"]["N"])
