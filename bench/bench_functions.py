@@ -1,7 +1,9 @@
 """Figures of the Lambda functions themselves: their cold start as the Lambda runtime sees it (the
-handler module's import, and import + first request, against the floor of a fresh Python that
-imports boto3 and makes one Query), built size, and the pull handler's warm time against a bare
-DynamoDB Query of the same items (on DynamoDB Local).
+handler module's import, and import + first request, against each function's floor: for the pull
+function a fresh Python that imports boto3 and makes one Query; for the others a fresh Python that
+gives the same output — the body validated with pydantic and the very writes the function made,
+or the card's SVG drawn), built size, and the pull handler's warm time against a bare DynamoDB
+Query of the same items (on DynamoDB Local).
 
     python bench/bench_functions.py [--quick] [--built .aws-sam/build] [--python PYTHON] [--json FILE]
 
