@@ -100,6 +100,23 @@ def test_a_push_keeps_the_pages_drboard_pull_and_the_api_ask_for(cloud: Calls) -
     assert "limit=25" in event("pull_board.json")["rawQueryString"]
 
 
+def test_a_run_that_changes_no_standings_renders_no_page(cloud: Calls) -> None:
+    push.lambda_handler(push_event("Ada", 12_000), LocalContext())
+    written: list[str] = []
+    assert boto3.DEFAULT_SESSION is not None
+    boto3.DEFAULT_SESSION.events.register(
+        "before-call.dynamodb.PutItem", lambda params, **_: written.append(params["Item"]["board"]["S"]))
+    wiring.forget()
+    slower = push.lambda_handler(push_event("Ada", 13_000), LocalContext())
+    assert slower["statusCode"] == 201 and json.loads(slower["body"])["improved"] is False
+    assert not [partition for partition in written if partition.startswith("#PAGE#")]
+    assert pull.lambda_handler(event("pull_board.json"), LocalContext())["statusCode"] == 200
+    wiring.forget()
+    cloud.clear()
+    pull.lambda_handler(event("pull_board.json"), LocalContext())
+    assert cloud == ["BatchGetItem"], "the pages kept for the version the first run made still hold"
+
+
 def test_a_kept_page_is_never_answered_for_another_version(cloud: Calls) -> None:
     push.lambda_handler(push_event("Ada", 12_000), LocalContext())
     first = pull.lambda_handler(event("pull_board.json"), LocalContext())

@@ -7,6 +7,7 @@ answers them from one read, cold or warm, without rendering them (see ``routes.s
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 from aws_lambda_powertools import Logger, Metrics
@@ -46,12 +47,20 @@ def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware)
     pull function (a page that could not be kept is rendered by its first reader instead)."""
     response = next_middleware(app)
     board = app.context.get("_route_args", {}).get("board")
-    if app.current_event.http_method == "POST" and response.status_code == 201 and board:
+    if app.current_event.http_method == "POST" and response.status_code == 201 and board \
+            and changed_the_standings(response):
         try:
             standings_of(app.context["service"]).renew(segment(board), PUSHED_LIMITS)
         except DomainError as error:
             logger.warning("StandingsNotKept", extra={"board": board, "error": str(error)})
     return response
+
+
+def changed_the_standings(response: Response[Any]) -> bool:
+    """Whether a stored run made its racer's entry better (else the board's version, and so its
+    kept pages, stay as they were)."""
+    receipt = json.loads(response.body) if isinstance(response.body, str | bytes) else {}
+    return bool(receipt.get("improved"))
 
 
 app = build_app(push_router)
