@@ -68,6 +68,19 @@ def cloud(aws: None, monkeypatch: pytest.MonkeyPatch) -> Iterator[Calls]:
     wiring.forget()
 
 
+def page_writes() -> list[str]:
+    """The partitions of the pages the functions keep from now on, one per page written."""
+    written: list[str] = []
+
+    def note(params: dict[str, Any], **_: Any) -> None:
+        if params["Item"]["board"]["S"].startswith("#PAGE#"):
+            written.append(params["Item"]["board"]["S"])
+
+    assert boto3.DEFAULT_SESSION is not None
+    boto3.DEFAULT_SESSION.events.register("before-parameter-build.dynamodb.PutItem", note)
+    return written
+
+
 def test_a_push_keeps_the_standings_a_new_container_answers_from_one_read(cloud: Calls) -> None:
     assert push.lambda_handler(push_event("Ada", 12_000), LocalContext())["statusCode"] == 201
     wiring.forget()
@@ -102,14 +115,11 @@ def test_a_push_keeps_the_pages_drboard_pull_and_the_api_ask_for(cloud: Calls) -
 
 def test_a_run_that_changes_no_standings_renders_no_page(cloud: Calls) -> None:
     push.lambda_handler(push_event("Ada", 12_000), LocalContext())
-    written: list[str] = []
-    assert boto3.DEFAULT_SESSION is not None
-    boto3.DEFAULT_SESSION.events.register(
-        "before-call.dynamodb.PutItem", lambda params, **_: written.append(params["Item"]["board"]["S"]))
+    written = page_writes()
     wiring.forget()
     slower = push.lambda_handler(push_event("Ada", 13_000), LocalContext())
     assert slower["statusCode"] == 201 and json.loads(slower["body"])["improved"] is False
-    assert not [partition for partition in written if partition.startswith("#PAGE#")]
+    assert written == []
     assert pull.lambda_handler(event("pull_board.json"), LocalContext())["statusCode"] == 200
     wiring.forget()
     cloud.clear()
@@ -125,21 +135,45 @@ def test_a_kept_page_is_never_answered_for_another_version(cloud: Calls) -> None
     assert [e["racer"] for e in json.loads(after["body"])["entries"]] == ["Bob", "Ada"]
     assert after["headers"]["ETag"] != first["headers"]["ETag"]
 
-    # An organiser's change moves the version: no push kept a page for it, the first reader
-    # renders it and keeps it for every container.
-    removed = admin.lambda_handler(event("admin_remove_entry.json", rawPath=f"/boards/{BOARD}/racers/Bob",
-                                         pathParameters={"board": BOARD, "racer": "Bob"}),
-                                   LocalContext())
+    # An organiser's change moves the version, and keeps the pages of the version it made.
+    removed = admin.lambda_handler(remove_entry("Bob"), LocalContext())
     assert removed["statusCode"] == 200, removed["body"]
     wiring.forget()
     cloud.clear()
     answer = pull.lambda_handler(event("pull_board.json"), LocalContext())
     assert [e["racer"] for e in json.loads(answer["body"])["entries"]] == ["Ada"]
-    assert "PutItem" in cloud, "rendered and kept"
+    assert cloud == ["BatchGetItem"]
+
+
+def remove_entry(racer: str) -> dict[str, Any]:
+    sent = event("admin_remove_entry.json")
+    path = f"/boards/{BOARD}/racers/{racer}"
+    sent["requestContext"]["http"]["path"] = path
+    return sent | {"rawPath": path, "pathParameters": {"board": BOARD, "racer": racer}}
+
+
+def test_a_page_no_one_kept_is_rendered_by_its_first_reader_and_kept_for_all(cloud: Calls) -> None:
+    push.lambda_handler(push_event("Ada", 12_000), LocalContext())
+    top_ten = event("pull_board.json", rawQueryString="limit=10", queryStringParameters={"limit": "10"})
     wiring.forget()
     cloud.clear()
-    again = pull.lambda_handler(event("pull_board.json"), LocalContext())
-    assert again["body"] == answer["body"] and cloud == ["BatchGetItem"]
+    first = pull.lambda_handler(top_ten, LocalContext())
+    assert first["statusCode"] == 200 and "PutItem" in cloud, "rendered, and kept"
+    wiring.forget()
+    cloud.clear()
+    assert pull.lambda_handler(top_ten, LocalContext())["body"] == first["body"]
+    assert cloud == ["BatchGetItem"]
+
+
+def test_an_import_one_submission_a_request_leaves_the_pages_to_their_reader(cloud: Calls) -> None:
+    kept = page_writes()
+    assert admin.lambda_handler(event("admin_import_board.json"), LocalContext())["statusCode"] == 201
+    board = event("admin_import_board.json")["pathParameters"]["board"]
+    assert kept == [f"#PAGE#{board}"] * 2, "the new board's pages"
+    kept.clear()
+    imported = admin.lambda_handler(event("admin_import_submission.json"), LocalContext())
+    assert imported["statusCode"] == 201, imported["body"]
+    assert kept == []
 
 
 def test_a_kept_web_page_is_answered_only_for_the_address_it_names(cloud: Calls) -> None:

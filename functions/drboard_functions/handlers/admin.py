@@ -14,8 +14,10 @@ from aws_lambda_powertools.event_handler.middlewares import NextMiddleware
 from aws_lambda_powertools.logging import correlation_paths
 from aws_lambda_powertools.utilities.typing import LambdaContext
 
+from ..errors import BoardNotFound
 from ..identity import caller_from_event
 from ..routes import admin_router, build_app, canonical_event
+from ..routes.standings import renew_after_change
 from . import wiring
 
 logger = Logger()
@@ -37,8 +39,27 @@ def audit(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Respo
     return response
 
 
+#: The routes an organiser calls many times in a row (an import over HTTP, one submission a
+#: request): the pages they change are rendered by their first reader instead.
+ONE_OF_MANY = ("/boards/<board>/imports",)
+
+
+def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
+    """After an organiser changed a board (its settings, window, entries, bans, rounds), its
+    standings as of the version the change made, kept for the pull function."""
+    response = next_middleware(app)
+    board = app.context.get("_route_args", {}).get("board")
+    route = app.context.get("_route")
+    if (app.current_event.http_method != "GET" and response.status_code < 300 and board
+            and getattr(route, "path", None) not in ONE_OF_MANY):
+        error = renew_after_change(app.context["service"], board)
+        if error is not None and not isinstance(error, BoardNotFound):  # a deleted board shows none
+            logger.warning("StandingsNotKept", extra={"board": board, "error": error.message})
+    return response
+
+
 app = build_app(admin_router)
-app.use(middlewares=[audit])
+app.use(middlewares=[audit, keep_standings])
 
 
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)

@@ -17,11 +17,8 @@ from aws_lambda_powertools.logging import correlation_paths
 from aws_lambda_powertools.metrics import MetricUnit
 from aws_lambda_powertools.utilities.typing import LambdaContext
 
-from ..errors import DomainError
 from ..routes import build_app, canonical_event, push_router
-from ..routes.kept import PUSHED_LIMITS
-from ..routes.params import segment
-from ..routes.standings import standings_of
+from ..routes.standings import renew_after_change
 from . import wiring
 
 logger = Logger()
@@ -43,16 +40,15 @@ def count_submissions(app: APIGatewayHttpResolver, next_middleware: NextMiddlewa
 
 
 def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
-    """After a run is stored, its board's standings as of the version it made, kept for the
-    pull function (a page that could not be kept is rendered by its first reader instead)."""
+    """After a run made its racer's entry better, its board's standings as of the version it
+    made, kept for the pull function."""
     response = next_middleware(app)
     board = app.context.get("_route_args", {}).get("board")
     if app.current_event.http_method == "POST" and response.status_code == 201 and board \
             and changed_the_standings(response):
-        try:
-            standings_of(app.context["service"]).renew(segment(board), PUSHED_LIMITS)
-        except DomainError as error:
-            logger.warning("StandingsNotKept", extra={"board": board, "error": str(error)})
+        error = renew_after_change(app.context["service"], board)
+        if error is not None:
+            logger.warning("StandingsNotKept", extra={"board": board, "error": error.message})
     return response
 
 

@@ -40,9 +40,11 @@ from typing import TYPE_CHECKING
 from weakref import WeakKeyDictionary
 
 from ..board_window import next_change
+from ..errors import DomainError
 from ..views import page_tag
 from .headers import HTML, JSON, PAGE_HEADERS, etag_headers, page_etag
-from .kept import Copy, KeptPages, Wanted, page_copy
+from .kept import PUSHED_LIMITS, Copy, KeptPages, Wanted, page_copy
+from .params import segment
 from .responses import page_policy
 
 if TYPE_CHECKING:
@@ -134,6 +136,18 @@ def _address(invite: Invite | None) -> str:
     if invite is None:
         return ""
     return invite.endpoint + (f" {invite.code}" if invite.code else "")
+
+
+def renew_after_change(service: LeaderboardService, board: str) -> DomainError | None:
+    """After a write that changed a board (the ``board`` of its path, as sent), its JSON pages of
+    :data:`.kept.PUSHED_LIMITS` entries rendered for the version it made and kept (in the table,
+    for every container of the pull function); the error that kept them from being kept, if
+    any (their first reader renders them instead)."""
+    try:
+        standings_of(service).renew(segment(board), PUSHED_LIMITS)
+    except DomainError as error:
+        return error
+    return None
 
 
 def _board_html(page: BoardPage, etag: str, invite: Invite, *, screen: bool, now: datetime,
