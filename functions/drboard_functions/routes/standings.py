@@ -20,10 +20,11 @@ label is compared with the board's version at every read, so a copy is never ans
 newer version, whoever made it (a push in another container, another process writing the same
 SQLite file); a version changes with every push that changes the standings and with every
 organiser's change (a season taking the board in or letting it go, too: its page links to them),
-in the same write. In the cloud the push that changes a board renders its JSON standings and
-keeps them (``handlers.push``), so they are there before anyone asks; other pages, and the pages
-after an organiser's change, are rendered and kept by their first reader. In front of the
-containers the CDN (see template.yaml) keeps viewers off them.
+in the same write. In the cloud the push, or the organiser's change, that changes a board
+renders its JSON standings and keeps them (:func:`renew_after_change`, in ``handlers.push`` and
+``handlers.admin``), so they are there before anyone asks; other pages are rendered and kept by
+their first reader. In front of the containers the CDN (see template.yaml) keeps viewers off
+them.
 
 A page also depends on the clock: the board opens and closes at set times (its status, and
 whether designs show), and the web page counts down to that moment. A copy is kept until the
