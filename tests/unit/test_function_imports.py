@@ -129,6 +129,46 @@ def test_the_pull_function_answers_the_standings_without_the_record_schema(board
     assert found["record_schema_built"] is False
 
 
+#: Run in a fresh process: the pull function answering a page its table keeps (a shelf in
+#: memory here, as DynamoDB's answers it), and what that loaded.
+KEPT_PROBE = """
+import json, sys
+from datetime import UTC, datetime
+from drboard_functions.handlers import pull, wiring
+from drboard_functions.routes.kept import KeptPages
+from drboard_functions.stores.pages import StoredPage
+page = StoredPage(3, None, '"etag"', {"Content-Type": "application/json", "ETag": '"etag"'},
+                  {"ETag": '"etag"'}, '{"board": "kept"}')
+class Shelf:
+    def version(self, board_id):
+        return 3
+    def page(self, board_id, key):
+        return 3, page if key == "json#25" else None
+shelf = Shelf()
+wiring.kept_pages_from_environment = lambda: KeptPages(shelf.version, shelf, lambda: datetime.now(UTC))
+class Context:
+    function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
+    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
+    aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
+with open(sys.argv[1]) as file:
+    answer = pull.lambda_handler(json.load(file), Context())
+print(json.dumps({"answer": answer, "loaded": sorted(sys.modules)}))
+"""
+
+
+def test_the_pull_function_answers_a_kept_page_before_loading_the_resolver_or_pydantic() -> None:
+    done = subprocess.run([sys.executable, "-c", KEPT_PROBE, str(EVENTS / "pull_board.json")],
+                          capture_output=True, text=True, check=False,
+                          env={**os.environ, **LAMBDA_ENVIRONMENT})
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout.splitlines()[-1])
+    assert (found["answer"]["statusCode"], found["answer"]["body"]) == (200, '{"board": "kept"}')
+    assert among(found["loaded"], ("pydantic", "aws_lambda_powertools.event_handler",
+                                   "drboard_functions.models", "drboard_functions.service.",
+                                   "drboard_assembler.record", "jinja2")) == []
+    assert "drboard_functions.service" not in found["loaded"], "no service is built"
+
+
 #: Each function's events that need only a board holding the example push (test_handlers runs
 #: the others, in order).
 EVENTS_OF = {"pull": sorted(p.name for p in EVENTS.glob("pull_*.json")), "push": ["push.json"],

@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 from urllib.parse import parse_qsl, unquote
 
 from ..cursors import MAX_PAGE
+from ..errors import StoreError
+from ..stores.pages import StoredPage
 from .headers import READ_CORS, names_etag, origin_of
 
 if TYPE_CHECKING:
@@ -161,6 +163,11 @@ def lambda_answer(kept: Answer, origin: str | None) -> dict[str, Any]:
             "headers": headers, "cookies": []}
 
 
+def copy_key(page: Wanted, address: str) -> tuple[Wanted, str]:
+    """What a process keeps a copy of the page under: a web page for the address it names."""
+    return page, address if page.html else ""
+
+
 def shelf_key(page: Wanted, address: str) -> str:
     """The page's key on a store's shelf: its kind and size, and for a web page the address it
     names (its links and share card are absolute)."""
@@ -190,7 +197,7 @@ class KeptPages:
     def kept(self, page: Wanted, address: str = "") -> Copy | None:
         """The copy of the page for the board's version now, if one is kept: one read of the
         version (and of the shelf's page, when this process holds none for that version)."""
-        name = (page, address if page.html else "")
+        name = copy_key(page, address)
         with self._lock:
             copy = self._copies.get(name)
             if copy is not None:
@@ -214,14 +221,12 @@ class KeptPages:
     def held(self, page: Wanted, address: str = "") -> Copy | None:
         """The copy of the page this process holds, whatever its version (nothing is read)."""
         with self._lock:
-            return self._copies.get((page, address if page.html else ""))
+            return self._copies.get(copy_key(page, address))
 
     def keep(self, page: Wanted, address: str, copy: Copy) -> None:
         """Keep a page just rendered, here and on the store's shelf."""
-        self._remember((page, address if page.html else ""), copy)
+        self._remember(copy_key(page, address), copy)
         if self.shelf is not None:
-            from ..stores.pages import StoredPage
-
             fresh_until = copy.fresh_until.timestamp() if copy.fresh_until is not None else None
             self.shelf.keep(page.board_id, shelf_key(page, address), StoredPage(
                 copy.version, fresh_until, copy.etag, copy.headers, copy.not_modified_headers,
@@ -239,8 +244,6 @@ def event_answer(event: Mapping[str, Any], pages: KeptPages) -> dict[str, Any] |
     """The answer to an API Gateway (HTTP API) event from a kept page, if it asks for one that
     is kept for the board as it is now; None: the routes answer it. A store that cannot be read
     just now is the routes' to answer too (they say so, 503)."""
-    from ..errors import StoreError
-
     if event.get("body"):
         return None
     http = (event.get("requestContext") or {}).get("http") or {}

@@ -44,7 +44,7 @@ from ..board_window import next_change
 from ..errors import DomainError
 from ..views import page_tag
 from .headers import HTML, JSON, PAGE_HEADERS, etag_headers, page_etag
-from .kept import PUSHED_LIMITS, Copy, KeptPages, Wanted, page_copy
+from .kept import PUSHED_LIMITS, Copy, KeptPages, Wanted, copy_key, page_copy
 from .params import segment
 from .responses import page_policy
 
@@ -91,7 +91,7 @@ class Standings:
         kept = self.pages.kept(wanted, address)
         if kept is not None:
             return kept
-        name = (wanted, address if wanted.html else "")
+        name = copy_key(wanted, address)
         with self._lock:
             rendering = self._rendering.setdefault(name, threading.Lock())
         with rendering:
