@@ -39,9 +39,10 @@ def audit(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Respo
     return response
 
 
-#: The routes an organiser calls many times in a row (an import over HTTP, one submission a
-#: request): the pages they change are rendered by their first reader instead.
-ONE_OF_MANY = ("/boards/<board>/imports",)
+#: The routes an organiser's command calls many times in a row, a step at a time (an import over
+#: HTTP, a submission a request; a recheck; a build of rank counters): the pages they change are
+#: rendered by their first reader instead.
+ONE_OF_MANY = ("/boards/<board>/imports", "/boards/<board>/recheck", "/boards/<board>/rank-counters")
 
 
 def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware) -> Response[Any]:
