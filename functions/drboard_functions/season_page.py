@@ -24,6 +24,7 @@ from . import web
 from .display import ordinal, points_rule, points_text
 from .models.domain import BoardStatus
 from .models.seasons import RoundView, SeasonStandings, SeasonSummary, Standing
+from .templating import environment
 
 #: Racers on one page of the big screen, and how long it shows before the next.
 SCREEN_ROWS = 15
@@ -54,7 +55,7 @@ def _policy(script: bool) -> str:
 def _render(template: str, *, heading: str, subtitle: str, screen: bool = False,
             **context: Any) -> str:
     """A page on the templates' ``base.html``, as :mod:`.web` renders its own (never live)."""
-    return web.environment().get_template(template).render(
+    return environment().get_template(template).render(
         title=f"{heading} · drboard", heading=heading, subtitle=subtitle, live=None, screen=screen,
         refresh_s=web.REFRESH_S, assets=web.assets(), **context)
 

@@ -36,10 +36,9 @@ from .insights import LABELS, algorithm_differences, design_facts, fact_text
 from .models.domain import BoardStatus, Design, TimingMethod
 from .models.seasons import SeasonLink
 from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
+from .templating import environment
 
-if TYPE_CHECKING:  # both load with the first page that needs them (see the module's docstring)
-    from jinja2 import Environment
-
+if TYPE_CHECKING:  # loads with the first page that needs it (see the module's docstring)
     from . import charts
 
 REFRESH_S = 30
@@ -111,16 +110,6 @@ def content_security_policy(*, live: bool) -> str:
     if live:
         policy += f"; script-src '{assets().script_hash}'; connect-src 'self'"
     return policy
-
-
-@cache
-def environment() -> Environment:
-    """The templates' environment, built once per process (autoescape on)."""
-    from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
-
-    return Environment(loader=PackageLoader("drboard_functions", "templates"),
-                       autoescape=select_autoescape(default=True, default_for_string=True),
-                       undefined=StrictUndefined, trim_blocks=False, lstrip_blocks=False)
 
 
 def _render(template: str, *, title: str, heading: str, subtitle: str, live: dict[str, Any] | None = None,

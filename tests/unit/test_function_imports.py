@@ -169,6 +169,63 @@ def test_the_pull_function_answers_a_kept_page_before_loading_the_resolver_or_py
     assert "drboard_functions.service" not in found["loaded"], "no service is built"
 
 
+#: Run in a fresh process: the card function drawing a racer's card from the standings its
+#: table keeps (a shelf in memory holding the page given in a file), and what that loaded.
+CARD_PROBE = """
+import json, sys
+from datetime import UTC, datetime
+from drboard_functions.handlers import card, wiring
+from drboard_functions.routes.kept import KeptCards, KeptPages
+from drboard_functions.stores.pages import StoredPage
+with open(sys.argv[2]) as file:
+    page = StoredPage(**json.load(file))
+class Shelf:
+    def version(self, board_id):
+        return page.version
+    def page(self, board_id, key):
+        return page.version, page if key == "json#100" else None
+shelf = Shelf()
+pages = KeptPages(shelf.version, shelf, lambda: datetime.now(UTC))
+def draw(svg):
+    from drboard_functions.cards.png import render
+    return render(svg)
+wiring.kept_cards_from_environment = lambda: KeptCards(pages, draw)
+class Context:
+    function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
+    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
+    aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
+with open(sys.argv[1]) as file:
+    answer = card.lambda_handler(json.load(file), Context())
+print(json.dumps({"answer": answer, "loaded": sorted(sys.modules)}))
+"""
+
+
+def test_the_card_function_draws_a_kept_card_before_loading_the_resolver_or_pydantic(
+        board_with_a_push: Path, tmp_path: Path) -> None:
+    from drboard_functions.routes.kept import DEFAULT_LIMIT, Wanted
+    from drboard_functions.routes.standings import standings_of
+
+    service = sqlite_service(board_with_a_push)
+    board = json.loads((EVENTS / "card_racer.json").read_text())["pathParameters"]["board"]
+    kept = standings_of(service).copy(Wanted(board, "json", DEFAULT_LIMIT))
+    page = tmp_path / "page.json"
+    page.write_text(json.dumps({"version": kept.version, "fresh_until": None, "etag": kept.etag,
+                                "headers": kept.headers, "not_modified_headers": kept.not_modified_headers,
+                                "text": kept.text}))
+    done = subprocess.run([sys.executable, "-c", CARD_PROBE, str(EVENTS / "card_racer.json"), str(page)],
+                          capture_output=True, text=True, check=False,
+                          env={**os.environ, **LAMBDA_ENVIRONMENT})
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout.splitlines()[-1])
+    assert (found["answer"]["statusCode"], found["answer"]["isBase64Encoded"]) == (200, True)
+    assert found["answer"]["headers"]["Content-Type"] == "image/png"
+    loaded = [m for m in found["loaded"] if m != "drboard_functions.models.kinds"]
+    assert among(loaded, ("pydantic", "aws_lambda_powertools.event_handler",
+                          "drboard_functions.models.", "drboard_functions.service.",
+                          "drboard_assembler.record")) == []
+    assert "drboard_functions.service" not in loaded, "no service is built"
+
+
 #: Each function's events that need only a board holding the example push (test_handlers runs
 #: the others, in order).
 EVENTS_OF = {"pull": sorted(p.name for p in EVENTS.glob("pull_*.json")), "push": ["push.json"],

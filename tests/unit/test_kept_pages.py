@@ -20,7 +20,7 @@ os.environ.setdefault("POWERTOOLS_METRICS_NAMESPACE", "drboard")
 import boto3
 from aws_lambda_powertools.event_handler import CORSConfig
 from drboard_cli.serve import LocalContext
-from drboard_functions.handlers import admin, pull, push, wiring
+from drboard_functions.handlers import admin, card, pull, push, wiring
 from drboard_functions.routes.headers import CORS_HEADERS, CORS_MAX_AGE_S, CORS_ORIGIN, READ_CORS
 from drboard_functions.routes.kept import PUSHED_LIMITS, KeptPages, Wanted, event_answer, shelf_key
 from drboard_functions.stores.dynamodb.pages import DynamoDbPageShelf
@@ -198,6 +198,47 @@ def test_a_kept_page_answers_304_to_the_etag_the_client_holds(cloud: Calls) -> N
     held["headers"] = held["headers"] | {"if-none-match": f"W/{etag}"}
     answer = pull.lambda_handler(held, LocalContext())
     assert (answer["statusCode"], answer["body"]) == (304, "")
+
+
+# ---- result cards, drawn from the kept standings -----------------------------------------------
+
+
+def card_event(racer: str, kind: str = "png", **headers: str) -> dict[str, Any]:
+    sent = event("card_racer.json")
+    path = f"/boards/{BOARD}/racers/{racer}/card.{kind}"
+    sent["requestContext"]["http"]["path"] = path
+    return sent | {"rawPath": path, "pathParameters": {"board": BOARD, "racer": racer},
+                   "headers": sent["headers"] | headers}
+
+
+@pytest.mark.parametrize("kind", ["png", "svg"])
+def test_a_card_is_drawn_from_the_kept_standings_as_the_routes_draw_it(cloud: Calls, kind: str) -> None:
+    push.lambda_handler(push_event("Ada", 12_000), LocalContext())
+    push.lambda_handler(push_event("Bob", 11_000), LocalContext())
+    for racer in ("Ada", "bob"):  # the leader's card says by how much it leads
+        wiring.forget()
+        cloud.clear()
+        kept = card.lambda_handler(card_event(racer, kind), LocalContext())
+        assert kept["statusCode"] == 200
+        assert cloud == ["BatchGetItem"], "the standings the push kept, and nothing else"
+        drawn = card.resolved(card_event(racer, kind), LocalContext())
+        assert {k: kept[k] for k in ("body", "headers", "isBase64Encoded")} == {
+            k: drawn[k] for k in ("body", "headers", "isBase64Encoded")}, racer
+    holding = card_event("bob", kind, **{"if-none-match": kept["headers"]["ETag"]})
+    held = card.lambda_handler(holding, LocalContext())
+    assert (held["statusCode"], held["body"], held["isBase64Encoded"]) == (304, "", False)
+    assert held["headers"] == card.resolved(holding, LocalContext())["headers"]
+    shared = card.lambda_handler(card_event("Ada", kind, origin="https://club.example.org"), LocalContext())
+    assert shared["headers"] | READ_CORS == shared["headers"]
+
+
+def test_a_card_no_kept_page_shows_is_the_routes_to_draw(cloud: Calls) -> None:
+    push.lambda_handler(push_event("Ada", 12_000), LocalContext())
+    assert card.lambda_handler(card_event("Nobody"), LocalContext())["statusCode"] == 404
+    admin.lambda_handler(remove_entry("Ada"), LocalContext())
+    assert card.lambda_handler(card_event("Ada"), LocalContext())["statusCode"] == 404
+    push.lambda_handler(push_event("Cy", 15_000), LocalContext())
+    assert card.lambda_handler(card_event("Cy"), LocalContext())["statusCode"] == 200
 
 
 # ---- the shelf itself ----------------------------------------------------------------------------

@@ -1,15 +1,21 @@
-"""What a card says, in words, from the board's views."""
+"""What a card says, in words, from the board's views — or from a kept page's JSON of them,
+read without the models (:func:`racer_card_on_page`: how the card function draws a racer's card
+from the standings the push kept)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime
+from typing import TYPE_CHECKING, Any, Protocol
+
+from drboard_assembler.aliases import alias_key
 
 from ..display import gap, ordinal, percent, points_text, seconds
-from ..models.domain import BoardStatus, TimingMethod
-from ..models.seasons import SeasonStandings, Standing
-from ..models.views import BoardView, EntryView
+from ..models.kinds import BoardStatus, TimingMethod
+
+if TYPE_CHECKING:
+    from ..models.seasons import SeasonStandings, Standing
 
 _RESULT = {TimingMethod.BEST_LAP_TIME: "best lap", TimingMethod.AVG_LAP_TIME: "average lap",
            TimingMethod.TOTAL_TIME: "total time"}
@@ -55,7 +61,86 @@ class Podium:
     date: str
 
 
-def racer_card(board: BoardView, entry: EntryView, runner_up: EntryView | None = None) -> RacerCard:
+class CardBoard(Protocol):
+    """What a racer's card reads of the board (a ``BoardView``, or its JSON on a kept page)."""
+
+    @property
+    def title(self) -> str: ...
+    @property
+    def track_name(self) -> str: ...
+    @property
+    def method(self) -> TimingMethod: ...
+    @property
+    def status(self) -> BoardStatus: ...
+    @property
+    def participants(self) -> int: ...
+
+
+class CardEntry(Protocol):
+    """What a racer's card reads of an entry (an ``EntryView``, or its JSON on a kept page)."""
+
+    @property
+    def rank(self) -> int: ...
+    @property
+    def racer(self) -> str: ...
+    @property
+    def model_name(self) -> str: ...
+    @property
+    def qualified(self) -> bool: ...
+    @property
+    def time_ms(self) -> int | None: ...
+    @property
+    def gap_ms(self) -> int | None: ...
+    @property
+    def best_completion_pct(self) -> float: ...
+    @property
+    def submitted_at(self) -> datetime: ...
+
+
+@dataclass(frozen=True)
+class PageBoard:
+    title: str
+    track_name: str
+    method: TimingMethod
+    status: BoardStatus
+    participants: int
+
+
+@dataclass(frozen=True)
+class PageEntry:
+    rank: int
+    racer: str
+    model_name: str
+    qualified: bool
+    time_ms: int | None
+    gap_ms: int | None
+    best_completion_pct: float
+    submitted_at: datetime
+
+
+def racer_card_on_page(page: Mapping[str, Any], racer: str) -> RacerCard | None:
+    """The racer's card from a board page's JSON (``BoardPage``: the board and its entries in
+    rank order), the same card :func:`racer_card` makes of the views; None when the racer is not
+    on the page."""
+    entries = page["entries"]
+    key = alias_key(racer)
+    found = next((n for n, entry in enumerate(entries) if alias_key(entry["racer"]) == key), None)
+    if found is None:
+        return None
+    board = page["board"]
+    runner_up = _page_entry(entries[1]) if len(entries) > 1 else None
+    return racer_card(PageBoard(board["title"], board["track_name"], TimingMethod(board["method"]),
+                                BoardStatus(board["status"]), board["participants"]),
+                      _page_entry(entries[found]), runner_up)
+
+
+def _page_entry(entry: Mapping[str, Any]) -> PageEntry:
+    return PageEntry(entry["rank"], entry["racer"], entry["model_name"], entry["qualified"],
+                     entry["time_ms"], entry["gap_ms"], entry["best_completion_pct"],
+                     datetime.fromisoformat(entry["submitted_at"]))
+
+
+def racer_card(board: CardBoard, entry: CardEntry, runner_up: CardEntry | None = None) -> RacerCard:
     """The card of the racer's ``entry`` on ``board``; ``runner_up`` is the board's second, for
     the leader's lead."""
     if entry.qualified:

@@ -110,7 +110,7 @@ def figure_width(figure: Text) -> float:
 
 
 def _render(template: str, texts: list[Text], date: str, **context: Any) -> str:
-    from ..web import environment
+    from ..templating import environment
 
     return environment().get_template(f"cards/{template}").render(
         width=WIDTH, height=HEIGHT, margin=MARGIN, colours=COLOURS, family=FAMILY, texts=texts,

@@ -9,8 +9,9 @@ reused by every invocation. ``BOARD_URL`` is the board's address, which the Noti
 announcements link to.
 
 Each piece is built on first use, and imports what it needs then: the pull function answers a
-kept page with :func:`kept_pages_from_environment` (a DynamoDB client and the table's page shelf)
-before anything builds the service or loads a model.
+kept page with :func:`kept_pages_from_environment` (a DynamoDB client and the table's page shelf),
+and the card function a card drawn from one with :func:`kept_cards_from_environment`, before
+anything builds the service or loads a model.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
 
     from ..identity import SignIn
     from ..notify.notifier import Notifier
-    from ..routes.kept import KeptPages
+    from ..routes.kept import KeptCards, KeptPages
     from ..service import LeaderboardService
 
 
@@ -52,6 +53,20 @@ def kept_pages_from_environment() -> KeptPages:
 
     shelf = DynamoDbPageShelf(dynamodb_client(), os.environ["TABLE_NAME"])
     return KeptPages(shelf.version, shelf, lambda: datetime.now(UTC))
+
+
+@cache
+def kept_cards_from_environment() -> KeptCards:
+    """The cards this container draws from the standings kept for their board (the card
+    function's)."""
+    from ..routes.kept import KeptCards
+
+    def draw(svg: str) -> bytes:
+        from ..cards.png import render
+
+        return render(svg)
+
+    return KeptCards(kept_pages_from_environment(), draw)
 
 
 @cache
@@ -81,5 +96,5 @@ def forget() -> None:
     """Forget what this container built: the next request reads the environment again, as a
     new container would."""
     for built in (dynamodb_client, service_from_environment, kept_pages_from_environment,
-                  notifier_from_environment, sign_in_from_environment):
+                  kept_cards_from_environment, notifier_from_environment, sign_in_from_environment):
         built.cache_clear()

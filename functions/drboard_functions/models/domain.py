@@ -2,7 +2,6 @@
 the audit trail, as the service reasons about them and the stores keep them."""
 
 from datetime import UTC, datetime
-from enum import StrEnum
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, TypeVar
 
 from drboard_assembler.record import Conditions, RaceType
@@ -10,6 +9,8 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstra
 
 from ..cursors import MAX_PAGE as MAX_PAGE  # the bound of pages, kept with their cursors
 from ..display import design_known
+from .kinds import BoardStatus as BoardStatus  # with the other models' names, for their users
+from .kinds import TimingMethod as TimingMethod
 
 if TYPE_CHECKING:
     from .views import BoardView
@@ -53,12 +54,6 @@ CooldownSeconds = Annotated[int, Field(ge=0, le=MAX_COOLDOWN_S)]
 
 
 SubmissionCap = Annotated[int, Field(ge=1, le=MAX_SUBMISSIONS)]
-
-
-class TimingMethod(StrEnum):
-    BEST_LAP_TIME = "BEST_LAP_TIME"
-    AVG_LAP_TIME = "AVG_LAP_TIME"
-    TOTAL_TIME = "TOTAL_TIME"
 
 
 DEFAULT_MIN_LAPS = {
@@ -116,12 +111,6 @@ class BoardRules(Model):
             method = TimingMethod(data.get("method", TimingMethod.BEST_LAP_TIME))
             data = {**data, "min_laps": DEFAULT_MIN_LAPS[method]}
         return data
-
-
-class BoardStatus(StrEnum):
-    UPCOMING = "UPCOMING"
-    OPEN = "OPEN"
-    CLOSED = "CLOSED"
 
 
 class Board(Model):

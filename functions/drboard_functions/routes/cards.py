@@ -3,26 +3,23 @@ result, and a season's podium, as SVG and as PNG, at stable addresses the pages 
 Open Graph meta.
 
 A card answers with an ``ETag`` of its SVG (the PNG is drawn from it), so a client that holds
-the card as it stands is answered ``304`` before anything is drawn. The cards and their renderer
+the card as it stands is answered ``304`` before anything is drawn. In the cloud the card function
+draws a racer's card from the standings kept for the board's version before it loads these
+routes (see ``routes.kept.KeptCards``). The cards and their renderer
 are imported on the first card a process draws (the pull function never does)."""
 
 from __future__ import annotations
 
 import base64
-import hashlib
 from http import HTTPStatus
 from typing import Any
 
 from aws_lambda_powertools.event_handler import Response
 
-from .headers import api_version
+from .headers import PNG, SVG, SVG_POLICY, card_etag, card_headers, names_etag
 from .params import BoardId, IfNoneMatch, RacerAlias, SeasonId, Service, card_router, segment
 from .responses import BAD_PATH, error_response
 
-SVG = "image/svg+xml"
-PNG = "image/png"
-#: A card changes with the board: link previews may keep it a few minutes.
-CACHE = "public, max-age=300"
 SIZE = "1200×630"  # cards.WIDTH × cards.HEIGHT
 _NOT_FOUND = "No such board, or no such racer on it."
 
@@ -35,15 +32,13 @@ def card_response(kind: str) -> Any:
 
 def card_answer(svg: str, kind: str, if_none_match: str | None) -> Response[str]:
     """The card as SVG or PNG (drawn only when the client does not hold it already)."""
-    digest = hashlib.sha256(f"{api_version()}|{svg}".encode()).hexdigest()[:24]
-    etag = f'"card.{kind}.{digest}"'
-    headers = {"ETag": etag, "Cache-Control": CACHE, "X-Content-Type-Options": "nosniff"}
-    if if_none_match and etag in (tag.strip() for tag in if_none_match.split(",")):
+    etag = card_etag(svg, kind)
+    headers = card_headers(etag)
+    if names_etag(if_none_match, etag):
         return Response(status_code=HTTPStatus.NOT_MODIFIED, headers=headers, body="")
     if kind == "svg":
-        # opened on its own, the SVG may load and run nothing
         return Response(status_code=HTTPStatus.OK, content_type=SVG, body=svg,
-                        headers=headers | {"Content-Security-Policy": "default-src 'none'"})
+                        headers=headers | SVG_POLICY)
     from ..cards.png import render
 
     # API Gateway carries a binary body as base64: said here, since the route's answer is

@@ -13,6 +13,8 @@ from drboard_assembler import __version__ as assembler_version
 
 JSON = "application/json"
 HTML = "text/html; charset=utf-8"
+SVG = "image/svg+xml"
+PNG = "image/png"
 #: Every page's headers; its Content-Security-Policy comes from ``responses.page_answer`` (the
 #: pages load nothing and run no script but their own inlined style and script, allowed by hash).
 PAGE_HEADERS = {
@@ -59,6 +61,21 @@ def page_etag(tag: str, limit: int, cursor: str | None) -> str:
 
 def etag_headers(etag: str) -> dict[str, str]:
     return {"ETag": etag, "Cache-Control": PUBLIC_CACHE}
+
+
+def card_etag(svg: str, kind: str) -> str:
+    """The ETag of a result card as SVG or PNG: its SVG's digest (the PNG is drawn from it)."""
+    digest = hashlib.sha256(f"{api_version()}|{svg}".encode()).hexdigest()[:24]
+    return f'"card.{kind}.{digest}"'
+
+
+def card_headers(etag: str) -> dict[str, str]:
+    """A card's answer's headers, 200 (with its Content-Type) or 304."""
+    return etag_headers(etag) | {"X-Content-Type-Options": "nosniff"}
+
+
+#: An SVG card opened on its own may load and run nothing.
+SVG_POLICY = {"Content-Security-Policy": "default-src 'none'"}
 
 
 def body_etag(body: str) -> str:

@@ -1,15 +1,19 @@
 """A board's top page kept as the bytes that answer it: which page a request asks for
-(:func:`wanted`), a kept copy (:class:`Copy`) and its answer (:func:`answer`), and the copies a
-process keeps beside those its store keeps (:class:`KeptPages`).
+(:func:`wanted`), a kept copy (:class:`Copy`) and its answer (:func:`answer`), the copies a
+process keeps beside those its store keeps (:class:`KeptPages`), and racers' result cards drawn
+from a kept page (:class:`KeptCards`).
 
 No model, no Powertools and no service here: the pull function answers a kept page with this
-module and the store's page shelf alone (:func:`event_answer`), before it loads the resolver,
-pydantic or any route. Rendering a page, and keeping it, is :mod:`.standings`' work.
+module and the store's page shelf alone (:func:`event_answer`), and the card function a card
+drawn from one (:func:`card_event_answer`), before either loads the resolver, pydantic or any
+route. Rendering a page, and keeping it, is :mod:`.standings`' work.
 """
 
 from __future__ import annotations
 
+import base64
 import hashlib
+import json
 import re
 import threading
 from collections import OrderedDict
@@ -23,7 +27,7 @@ from urllib.parse import parse_qsl, unquote
 from ..cursors import MAX_PAGE
 from ..errors import StoreError
 from ..stores.pages import StoredPage
-from .headers import READ_CORS, names_etag, origin_of
+from .headers import PNG, READ_CORS, SVG, SVG_POLICY, card_etag, card_headers, names_etag, origin_of
 
 if TYPE_CHECKING:
     from ..stores.pages import PageShelf
@@ -41,6 +45,8 @@ _LIMIT = re.compile(r"[1-9][0-9]{0,2}")
 _SCREEN = {"1": True, "true": True, "0": False, "false": False}
 
 Kind = Literal["json", "view", "screen"]
+CardKind = Literal["svg", "png"]
+_CARD_FILES: dict[str, CardKind] = {"card.svg": "svg", "card.png": "png"}
 Clock = Callable[[], datetime]
 
 
@@ -104,6 +110,8 @@ class Copy:
     #: The same headers as ASGI wants them (lower-case bytes, Content-Length included).
     raw_headers: list[tuple[bytes, bytes]] = field(repr=False)
     raw_not_modified_headers: list[tuple[bytes, bytes]] = field(repr=False)
+    #: A binary body (a card's PNG): ``text`` is its base64, as API Gateway carries it.
+    binary: bool = False
 
     def matches(self, if_none_match: str | None) -> bool:
         """Whether the client's If-None-Match names this copy (a weak comparison: a CDN that
@@ -120,6 +128,20 @@ def page_copy(version: int, fresh_until: datetime | None, etag: str, text: str,
     body = text.encode("utf-8")
     return Copy(version, fresh_until, etag, text, body, headers, not_modified,
                 _raw(headers, len(body)), _raw(not_modified, 0))
+
+
+def card_copy(page: Copy, svg: str, kind: CardKind, draw: Callable[[str], bytes]) -> Copy:
+    """A result card as the card routes answer it (see ``routes.cards``), drawn from ``svg``,
+    held while the page it was drawn from holds."""
+    etag = card_etag(svg, kind)
+    headers = card_headers(etag)
+    if kind == "svg":
+        return page_copy(page.version, page.fresh_until, etag, svg,
+                         headers | SVG_POLICY | {"Content-Type": SVG}, headers)
+    png = draw(svg)
+    ok = headers | {"Content-Type": PNG}
+    return Copy(page.version, page.fresh_until, etag, base64.b64encode(png).decode("ascii"), png,
+                ok, headers, _raw(ok, len(png)), _raw(headers, 0), binary=True)
 
 
 def _raw(headers: Mapping[str, str], length: int) -> list[tuple[bytes, bytes]]:
@@ -159,7 +181,8 @@ def lambda_answer(kept: Answer, origin: str | None) -> dict[str, Any]:
     """A kept copy's answer as an API Gateway (HTTP API) proxy answer, with the reads' CORS
     headers when the request named its origin."""
     headers = kept.headers | READ_CORS if origin else kept.headers
-    return {"statusCode": int(kept.status), "body": kept.text, "isBase64Encoded": False,
+    binary = kept.copy.binary and kept.status == HTTPStatus.OK
+    return {"statusCode": int(kept.status), "body": kept.text, "isBase64Encoded": binary,
             "headers": headers, "cookies": []}
 
 
@@ -240,6 +263,67 @@ class KeptPages:
                 self._copies.popitem(last=False)
 
 
+class WantedCard(NamedTuple):
+    """A racer's result card, as a request asks for it."""
+
+    board_id: str
+    racer: str
+    kind: CardKind
+
+
+def wanted_card(method: str, path: str, query: str) -> WantedCard | None:
+    """The card a request asks for, if it is one a kept page may draw: a GET of a racer's card
+    on a board, as SVG or PNG, with no query (anything else goes through the routes)."""
+    if method != "GET" or query or not path.startswith("/boards/"):
+        return None
+    parts = path[8:].split("/")
+    if len(parts) != 4 or parts[1] != "racers" or parts[3] not in _CARD_FILES:
+        return None
+    board, racer = parts[0], parts[2]
+    if any(len(segment) > MAX_SEGMENT_CHARS or not _SEGMENT.fullmatch(segment)
+           for segment in (board, racer)):
+        return None
+    return WantedCard(unquote(board), unquote(racer), _CARD_FILES[parts[3]])
+
+
+class KeptCards:
+    """Racers' result cards drawn from their board's standings as kept for its version now (the
+    page of :data:`DEFAULT_LIMIT` entries the push kept): no model, no route, no read but the
+    page's. A card is drawn once per page and kind, and held in this process while its page
+    holds; a racer not on that page is the routes' to draw."""
+
+    def __init__(self, pages: KeptPages, draw: Callable[[str], bytes], size: int = KEPT_PAGES) -> None:
+        self.pages = pages
+        self.draw = draw
+        self.size = size
+        self._cards: OrderedDict[tuple[str, str, CardKind], tuple[str, Copy]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def kept(self, card: WantedCard) -> Copy | None:
+        page = self.pages.kept(Wanted(card.board_id, "json", DEFAULT_LIMIT))
+        if page is None:
+            return None
+        from drboard_assembler.aliases import alias_key
+
+        name = (card.board_id, alias_key(card.racer), card.kind)
+        with self._lock:
+            held = self._cards.get(name)
+        if held is not None and held[0] == page.etag:
+            return held[1]
+        from .. import cards
+
+        content = cards.racer_card_on_page(json.loads(page.text), card.racer)
+        if content is None:
+            return None
+        copy = card_copy(page, cards.racer_svg(content), card.kind, self.draw)
+        with self._lock:
+            self._cards[name] = (page.etag, copy)
+            self._cards.move_to_end(name)
+            while len(self._cards) > self.size:
+                self._cards.popitem(last=False)
+        return copy
+
+
 def event_answer(event: Mapping[str, Any], pages: KeptPages) -> dict[str, Any] | None:
     """The answer to an API Gateway (HTTP API) event from a kept page, if it asks for one that
     is kept for the board as it is now; None: the routes answer it. A store that cannot be read
@@ -257,6 +341,27 @@ def event_answer(event: Mapping[str, Any], pages: KeptPages) -> dict[str, Any] |
         copy = pages.kept(page, address)
     except StoreError:
         return None
+    return _answered(copy, headers)
+
+
+def card_event_answer(event: Mapping[str, Any], cards: KeptCards) -> dict[str, Any] | None:
+    """The answer to an API Gateway (HTTP API) event from a card drawn from a kept page, if it
+    asks for one (see :class:`KeptCards`); None: the routes answer it."""
+    if event.get("body"):
+        return None
+    http = (event.get("requestContext") or {}).get("http") or {}
+    card = wanted_card(str(http.get("method", "")), str(event.get("rawPath") or ""),
+                       str(event.get("rawQueryString") or ""))
+    if card is None:
+        return None
+    try:
+        copy = cards.kept(card)
+    except StoreError:
+        return None
+    return _answered(copy, event.get("headers") or {})
+
+
+def _answered(copy: Copy | None, headers: Mapping[str, str]) -> dict[str, Any] | None:
     if copy is None:
         return None
     return lambda_answer(answer(copy, headers.get("if-none-match")), headers.get("origin"))
