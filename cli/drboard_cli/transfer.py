@@ -5,14 +5,15 @@ its entries in rank order, then every submission with its full record. It is wri
 board gives it (straight from the store on the embedded board, a page at a time over HTTP), never
 held whole.
 
-An import first reads the whole file and checks every line; one bad line names the file, the line
-and the field, and nothing is imported. Then it creates the board (unless a board with that id
-exists: its own settings stay) and replays every submission with its first submission time. The
-target recomputes the entries from the submissions under its own rules: the export's entry lines
-are informative. A submission already on the board is a duplicate and changes nothing, so
-importing the same file twice is harmless. Into the embedded board, the check also prepares every
-submission and the board writes them in bulk (``load_export``); a board over HTTP takes them one
-request each (``check_export`` then ``import_export``).
+An import checks every line of the file; one bad line names the file, the line and the field,
+and nothing is imported. It creates the board (unless a board with that id exists: its own
+settings stay) and replays every submission with its first submission time. The target
+recomputes the entries from the submissions under its own rules: the export's entry lines are
+informative. A submission already on the board is a duplicate and changes nothing, so importing
+the same file twice is harmless. Into the embedded board, the check also prepares every
+submission and the board writes them in bulk as they are checked, all in one transaction that
+is committed only once the last line is checked (``load_export``); a board over HTTP takes them
+one request each, once the whole file is checked (``check_export`` then ``import_export``).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from __future__ import annotations
 import errno
 import functools
 import io
+import itertools
 import multiprocessing
 import os
 import pickle
@@ -34,7 +36,7 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any, TypeGuard
+from typing import IO, TYPE_CHECKING, Any, NamedTuple, TypeGuard
 
 from drboard_assembler.errors import field_path
 from drboard_assembler.record import RaceType
@@ -58,7 +60,7 @@ Prepare = Callable[[ImportedSubmission], "PreparedSubmission"]
 Phase = Callable[[str, int | None], Callable[[int], None]]
 
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
-#: Submissions an import in bulk writes in one transaction.
+#: Submissions an import in bulk replays and writes at a time.
 IMPORT_BATCH = 10_000
 #: Lines checked and prepared at a time.
 CHUNK_LINES = 500
@@ -231,34 +233,43 @@ def loads_in_bulk(client: BoardClient) -> TypeGuard[LeaderboardService]:
 
 def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
                 phase: Phase = lambda _, __: lambda _: None) -> ImportSummary:
-    """Import an export file in bulk: every line is read and checked, and every submission
-    prepared (kept in a temporary file), before anything is written; one bad line names the
-    file, the line and the field, and nothing is imported. Then the board is created (unless
-    it exists: its own settings stay) and the prepared submissions are written, IMPORT_BATCH
-    to a transaction. Each record is checked for its schema and bounds, its size and its
-    integrity (its submission id is its content's hash), as the board's stored records are:
-    not against today's rules of aliases, text, tracks and lap floors (`drboard board recheck`
-    flags the records those would refuse)."""
-    with tempfile.TemporaryFile() as spool:
-        bulk, entries, submissions = _prepare(service, name, handle, board_id, spool, phase)
-        view, created = bulk.open()
-        summary = ImportSummary(board=view, board_created=created, entry_lines=entries)
-        advance = phase("Importing submissions", submissions)
-        spool.seek(0)
-        for batch in _batches(spool):
-            tally = bulk.load(batch)
-            summary.created += tally.created
-            summary.duplicates += tally.duplicates
-            advance(len(batch))
-    summary.board = service.board_page(view.board_id, 1, None).board
+    """Import an export file in bulk, in one transaction: the board is created (unless it
+    exists: its own settings stay) and the submissions written IMPORT_BATCH at a time as their
+    lines are checked, and all of it is committed only once every line is checked and every
+    submission written; one bad line names the file, the line and the field, and the
+    transaction is rolled back: nothing is imported. Each record is checked for its schema and
+    bounds, its size and its integrity (its submission id is its content's hash), as the
+    board's stored records are: not against today's rules of aliases, text, tracks and lap
+    floors (`drboard board recheck` flags the records those would refuse). A store that cannot
+    hold an import in one transaction has every line checked (and every submission prepared,
+    kept in a temporary file) before anything is written, then a transaction per batch."""
+    size = _size(handle)
+    bulk, exported, after = _opened(service, name, handle, board_id)
+    with _checking(name, exported, bulk, _chunks(name, handle, after), size) as checked:
+        counted = _counted(checked, phase("Checking the export", size))
+        if bulk.holds_whole:
+            with bulk.whole():
+                summary = _loaded(bulk, counted, phase)
+        else:
+            with tempfile.TemporaryFile() as spool:
+                summary = _loaded(bulk, _checked_first(counted, spool), phase)
+    summary.board = service.board_page(summary.board.board_id, 1, None).board
     return summary
 
 
-def _prepare(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
-             spool: IO[bytes], phase: Phase) -> tuple[BulkImport, int, int]:
-    """Check every line and prepare every submission into ``spool`` (a pickled list per chunk
-    of lines): the import, and how many entry and submission lines the file holds."""
-    advance = phase("Checking the export", _size(handle))
+class _Checked(NamedTuple):
+    """A chunk of an export's lines checked: its prepared submissions, its entry lines, the
+    bytes read."""
+
+    prepared: list[PreparedSubmission]
+    entries: int
+    read: int
+
+
+def _opened(service: LeaderboardService, name: str, handle: IO[bytes],
+            board_id: str | None) -> tuple[BulkImport, Board, int]:
+    """The import of the export whose board line is read first: the import, the exported
+    board, and that line's number."""
     first = _first_line(name, handle)
     if first is None:
         raise BadExportFile(f"{name}: the file is empty: an export starts with its board line")
@@ -270,44 +281,95 @@ def _prepare(service: LeaderboardService, name: str, handle: IO[bytes], board_id
     board = _renamed(exported, board_id) if board_id and board_id != exported.board_id else exported
     bulk = service.bulk_import(board)
     _check_same_track(bulk.board, board)
-    entries = submissions = 0
-    chunks = _chunks(name, handle, number)
-    for pickled, counts, read in _checked(name, exported, bulk, chunks, _size(handle)):
-        spool.write(pickled)
-        entries += counts[0]
-        submissions += counts[1]
-        advance(read)
-    return bulk, entries, submissions
+    return bulk, exported, number
 
 
-def _checked(name: str, exported: Board, bulk: BulkImport,
-             chunks: Iterator[list[tuple[int, bytes]]],
-             size: int | None) -> Iterator[tuple[bytes, tuple[int, int], int]]:
+def _loaded(bulk: BulkImport, checked: Iterator[_Checked], phase: Phase) -> ImportSummary:
+    """Open the board, then write the checked submissions IMPORT_BATCH at a time."""
+    view, created = bulk.open()
+    summary = ImportSummary(board=view, board_created=created)
+    advance = phase("Importing submissions", None)
+    batch: list[PreparedSubmission] = []
+    for chunk in checked:
+        summary.entry_lines += chunk.entries
+        batch += chunk.prepared
+        while len(batch) >= IMPORT_BATCH:
+            _load(bulk, batch[:IMPORT_BATCH], summary, advance)
+            batch = batch[IMPORT_BATCH:]
+    if batch:
+        _load(bulk, batch, summary, advance)
+    return summary
+
+
+def _load(bulk: BulkImport, batch: list[PreparedSubmission], summary: ImportSummary,
+          advance: Callable[[int], None]) -> None:
+    tally = bulk.load(batch)
+    summary.created += tally.created
+    summary.duplicates += tally.duplicates
+    advance(len(batch))
+
+
+def _counted(checked: Iterator[_Checked], advance: Callable[[int], None]) -> Iterator[_Checked]:
+    for chunk in checked:
+        advance(chunk.read)
+        yield chunk
+
+
+def _checked_first(checked: Iterator[_Checked], spool: IO[bytes]) -> Iterator[_Checked]:
+    """Every chunk checked and kept in ``spool`` before the first is given back."""
+    for chunk in checked:
+        pickle.dump(chunk, spool, protocol=pickle.HIGHEST_PROTOCOL)
+    spool.seek(0)
+    return _unspooled(spool)
+
+
+def _unspooled(spool: IO[bytes]) -> Iterator[_Checked]:
+    while True:
+        try:
+            yield pickle.load(spool)
+        except EOFError:
+            return
+
+
+@contextmanager
+def _checking(name: str, exported: Board, bulk: BulkImport, chunks: Iterator[list[tuple[int, bytes]]],
+              size: int | None) -> Iterator[Iterator[_Checked]]:
     """Every chunk checked and prepared (``_prepared_chunk``), in the file's order. A big file's
-    chunks are checked in worker processes, one per core, a few chunks ahead: the first bad
-    line in the file is still the one named, and nothing is written before every line is
-    checked. Worker processes start by fork where this process runs no other thread (a fork
-    copies no other thread's locks), else by spawn."""
+    chunks are checked in worker processes, one per core, enough chunks ahead to keep them busy
+    while a batch is written: the first bad line in the file is still the one named. Worker
+    processes start (with the first chunks) when the block is entered, by fork where this
+    process runs no other thread (a fork copies no other thread's locks), else by spawn."""
     workers = _workers(size)
     if workers < 2 or bulk.archive is not None:  # an archive is written as each line is prepared
-        for chunk in chunks:
-            yield _prepared_chunk(name, exported, bulk.prepare, chunk)
+        yield (_prepared_chunk(name, exported, bulk.prepare, chunk) for chunk in chunks)
         return
     from drboard_functions.service.loading import prepare_submission
 
     prepare = functools.partial(prepare_submission, bulk.board)
+    check = functools.partial(_prepared_chunk, name, exported, prepare)
     start = "fork" if threading.active_count() == 1 and os.name == "posix" else "spawn"
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start))
     try:
-        pending: deque[Future[tuple[bytes, tuple[int, int], int]]] = deque()
-        for chunk in chunks:
-            pending.append(pool.submit(_prepared_chunk, name, exported, prepare, chunk))
-            if len(pending) > 2 * workers:
-                yield pending.popleft().result()
-        while pending:
-            yield pending.popleft().result()
+        pending = deque(pool.submit(check, chunk)
+                        for chunk in itertools.islice(chunks, _ahead(workers)))
+        yield _in_order(pool, check, chunks, pending)
     finally:
         pool.shutdown(cancel_futures=True)
+
+
+def _ahead(workers: int) -> int:
+    """Chunks given to the workers ahead of the one written: a batch's, and two per worker."""
+    return IMPORT_BATCH // CHUNK_LINES + 2 * workers
+
+
+def _in_order(pool: ProcessPoolExecutor, check: Callable[[list[tuple[int, bytes]]], _Checked],
+              chunks: Iterator[list[tuple[int, bytes]]],
+              pending: deque[Future[_Checked]]) -> Iterator[_Checked]:
+    while pending:
+        done = pending.popleft().result()
+        for chunk in itertools.islice(chunks, 1):
+            pending.append(pool.submit(check, chunk))
+        yield done
 
 
 def _workers(size: int | None) -> int:
@@ -316,21 +378,6 @@ def _workers(size: int | None) -> int:
         return 1
     cores = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else range(os.cpu_count() or 1)
     return len(cores)
-
-
-def _batches(spool: IO[bytes]) -> Iterator[list[PreparedSubmission]]:
-    """The prepared submissions, IMPORT_BATCH at a time (the last batch may be smaller)."""
-    batch: list[PreparedSubmission] = []
-    while True:
-        try:
-            batch += pickle.load(spool)
-        except EOFError:
-            break
-        while len(batch) >= IMPORT_BATCH:
-            yield batch[:IMPORT_BATCH]
-            batch = batch[IMPORT_BATCH:]
-    if batch:
-        yield batch
 
 
 def _first_line(name: str, handle: IO[bytes]) -> tuple[int, ExportLine] | None:
@@ -363,9 +410,8 @@ def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, b
 
 
 def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
-                    chunk: list[tuple[int, bytes]]) -> tuple[bytes, tuple[int, int], int]:
-    """Check a chunk of an export's lines after its board line and prepare its submissions:
-    the pickled list of them, the (entry, submission) lines counted, and the bytes read."""
+                    chunk: list[tuple[int, bytes]]) -> _Checked:
+    """Check a chunk of an export's lines after its board line and prepare its submissions."""
     prepared: list[PreparedSubmission] = []
     entries = 0
     for number, raw in chunk:
@@ -383,8 +429,7 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
             prepared.append(prepare(item))
         except DomainError as error:
             raise BadExportFile(f"{where}: {_refusal(error)}") from None
-    return (pickle.dumps(prepared, protocol=pickle.HIGHEST_PROTOCOL), (entries, len(prepared)),
-            sum(len(raw) for _, raw in chunk))
+    return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
 
 
 def _refusal(error: DomainError) -> str:

@@ -1,6 +1,9 @@
 """A board's export imported in bulk (`drboard import` on the embedded board): every exported
-submission is checked and prepared once — what importing it writes — before anything is
-written; then the prepared submissions are written a batch at a time, one transaction each.
+submission is checked and prepared once — what importing it writes —, and the prepared
+submissions are written a batch at a time. Where the store can hold a whole import in one
+transaction (``whole``: the embedded board), the batches are written in it as the lines are
+checked, and nothing is kept unless every line passes; elsewhere every submission is checked
+before anything is written, and each batch is a transaction of its own.
 
 A batch writes what replaying its submissions one by one would (``Transfer.import_submission``):
 each submission not on the board yet, scored by the board's rules, the racer's entry when it is
@@ -23,7 +26,8 @@ record's schema and bounds are the caller's to check, as for every record the se
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
@@ -35,7 +39,7 @@ from ..identity import Caller
 from ..models.domain import AuditEvent, Board, Entry, NearRun, Submission, with_flag
 from ..models.requests import ImportedSubmission
 from ..models.views import BoardView
-from ..stores.base import ImportBatch, ImportedRow, IndexedRun, RecordArchive
+from ..stores.base import HeldWrites, ImportBatch, ImportedRow, IndexedRun, RecordArchive
 from .boards import BoardKeeper, check_belongs
 from .copies import COPIED, LOOKALIKE, NEAR_COPY, NEAR_MS, run_prints, same_laps
 from .pushing import check_record_size, keep_in_archive, scored_write
@@ -115,6 +119,20 @@ class BulkImport:
         prepared = prepare_submission(self.board, item)
         keep_in_archive(self.archive, self.board.board_id, item.record)
         return prepared
+
+    @property
+    def holds_whole(self) -> bool:
+        """Whether the store can hold the whole import in one transaction (``whole``)."""
+        return isinstance(self.store, HeldWrites)
+
+    @contextmanager
+    def whole(self) -> Iterator[None]:
+        """Every write of the import made in the block (``open``, ``load``) in one transaction:
+        committed when the block ends, none of them kept when it raises."""
+        if not isinstance(self.store, HeldWrites):
+            raise TypeError("the store cannot hold an import in one transaction")
+        with self.store.held_writes():
+            yield
 
     def open(self) -> tuple[BoardView, bool]:
         """Create the board unless it exists (as ``import_board``); whether it was created."""
