@@ -162,35 +162,45 @@ class BulkImport:
                             "checked; import it again")
 
 
+#: The side of a cell of a lane's runs, in milliseconds: the runs whose best and slowest laps
+#: are each within NEAR_MS of a run's lie in at most two cells each way.
+CELL_MS = 2 * NEAR_MS + 1
+
+
 class _Lane:
-    """The indexed runs of a lane, by best lap, each once per fingerprint, racer and board, as
-    (fingerprint, racer key, board id, submission id, sorted complete laps)."""
+    """The indexed runs of a lane, each once per best lap, fingerprint, racer and board, as
+    (fingerprint, racer key, board id, submission id, sorted complete laps), by the cell of
+    their best and slowest laps."""
 
     def __init__(self, runs: Sequence[NearRun]) -> None:
-        #: Best lap -> the runs with it, each beside its slowest lap (most runs a best lap
-        #: finds are told apart by their slowest, so that is compared first).
-        self.by_best: dict[int, list[tuple[int, NearTuple]]] = {}
+        self.cells: dict[tuple[int, int], list[NearTuple]] = {}
         self.keys: set[tuple[int, str, str, str]] = set()
         for run in runs:
             self.add((run.fingerprint, run.racer_key, run.board_id, run.submission_id,
                       tuple(run.laps_ms)))
 
     def add(self, run: NearTuple) -> None:
-        key = (run[4][0], run[0], run[1], run[2])
+        laps = run[4]
+        key = (laps[0], run[0], run[1], run[2])
         if key not in self.keys:
             self.keys.add(key)
-            self.by_best.setdefault(run[4][0], []).append((run[4][-1], run))
+            self.cells.setdefault((laps[0] // CELL_MS, laps[-1] // CELL_MS), []).append(run)
 
     def copied(self, fingerprint: str, racer_key: str, laps: tuple[int, ...]) -> NearTuple | None:
         """Another racer's run whose laps are each within NEAR_MS of these, the first in the
         order the store reads them (by best lap, fingerprint, racer and board), or None."""
-        slowest = laps[-1]
-        found = [run for best in range(laps[0] - NEAR_MS, laps[0] + NEAR_MS + 1)
-                 for other_slowest, run in self.by_best.get(best, ())
-                 if -NEAR_MS <= other_slowest - slowest <= NEAR_MS and len(run[4]) == len(laps)
-                 and run[1] != racer_key and run[0] != fingerprint
+        best, slowest = laps[0], laps[-1]
+        found = [run for row in _cells_near(best) for column in _cells_near(slowest)
+                 for run in self.cells.get((row, column), ())
+                 if abs(run[4][0] - best) <= NEAR_MS and abs(run[4][-1] - slowest) <= NEAR_MS
+                 and len(run[4]) == len(laps) and run[1] != racer_key and run[0] != fingerprint
                  and same_laps(list(laps), list(run[4]))]
         return min(found, key=lambda run: (run[4][0], run[0], run[1], run[2])) if found else None
+
+
+def _cells_near(ms: int) -> range:
+    """The cells of the times within NEAR_MS of ``ms``."""
+    return range((ms - NEAR_MS) // CELL_MS, (ms + NEAR_MS) // CELL_MS + 1)
 
 
 class _Replay:
@@ -226,8 +236,8 @@ class _Replay:
     def _import(self, prepared: PreparedSubmission) -> None:
         row = prepared.row
         self._event("import", prepared.racer, row.submission_id)
-        for fingerprint, lane, laps in prepared.runs:
-            self._index(row, fingerprint, lane, laps)
+        for run in prepared.runs:
+            self._index(row, *run)
         for fingerprint in prepared.fingerprints:
             if fingerprint not in self.fingerprint_holders:
                 self.fingerprint_holders[fingerprint] = row.racer_key
@@ -239,8 +249,8 @@ class _Replay:
         elif holder != row.racer_key:
             self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
                        LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
-        for fingerprint, lane, laps in prepared.runs:
-            self._copies_of(prepared, fingerprint, lane, laps)
+        for run in prepared.runs:
+            self._copies_of(prepared, *run)
 
     def _index(self, row: ImportedRow, fingerprint: str, lane: str,
                laps: tuple[int, ...] | None) -> None:
@@ -248,7 +258,9 @@ class _Replay:
         and its laps for near-copies (once per racer and board)."""
         self.runs.append(IndexedRun(fingerprint, lane, laps, row.racer_key, row.submitted_at,
                                     row.submission_id))
-        authors = self.authors.setdefault(fingerprint, {})
+        authors = self.authors.get(fingerprint)
+        if authors is None:
+            authors = self.authors[fingerprint] = {}
         mine = authors.get(row.racer_key)
         # Timestamps of one fixed width, in UTC: as text, they sort in time order.
         if mine is None or row.submitted_at < mine[0]:
@@ -264,17 +276,20 @@ class _Replay:
         row = prepared.row
         authors = self.authors[fingerprint]
         if len(authors) > 1:
-            ordered = sorted(authors.items(), key=lambda author: author[1][0])
-            first_racer, (first_at, first_board, _) = ordered[0]
-            tied = [racer for racer, (at, _, _) in ordered if at == first_at]
-            for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
-                self._flag((board_id, racer, submission_id), None, COPIED,
-                           f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
+            self._flag_copies(authors)
         if laps:
             near = self.load.lane(lane).copied(fingerprint, row.racer_key, laps)
             if near is not None:
                 self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
                            NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
+
+    def _flag_copies(self, authors: dict[str, tuple[str, str, str]]) -> None:
+        ordered = sorted(authors.items(), key=lambda author: author[1][0])
+        first_racer, (first_at, first_board, _) = ordered[0]
+        tied = [racer for racer, (at, _, _) in ordered if at == first_at]
+        for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
+            self._flag((board_id, racer, submission_id), None, COPIED,
+                       f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
 
     def _flag(self, where: Where, racer: str | None, flag: str, why: str) -> None:
         """Flag a run once: this batch's when it writes it, another's after the batch."""
