@@ -31,7 +31,7 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
-from drboard_assembler.record import content_hash
+from drboard_assembler.record import json_and_hash
 
 from .. import ranking
 from ..errors import InvalidSubmission, StoreBusy
@@ -42,7 +42,7 @@ from ..models.views import BoardView
 from ..stores.base import HeldWrites, ImportBatch, ImportedRow, IndexedRun, RecordArchive
 from .boards import BoardKeeper, check_belongs
 from .copies import COPIED, LOOKALIKE, NEAR_COPY, NEAR_MS, run_prints, same_laps
-from .pushing import check_record_size, keep_in_archive, scored_write
+from .pushing import check_record_json_size, keep_in_archive, scored_write
 
 if TYPE_CHECKING:
     from .transfer import Transfer
@@ -77,8 +77,9 @@ def prepare_submission(board: Board, item: ImportedSubmission) -> PreparedSubmis
     writes: reads and writes nothing."""
     record = item.record
     check_belongs(record, board)
-    stored = check_record_size(record)
-    if content_hash(record) != record.submission_id:
+    stored, digest = json_and_hash(record)
+    check_record_json_size(stored)
+    if digest != record.submission_id:
         raise InvalidSubmission("the record's submission_id does not match its content",
                                 detail=[{"loc": "record.submission_id", "type": "value_error",
                                          "msg": "does not match the record's content"}])
