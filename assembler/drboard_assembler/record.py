@@ -474,39 +474,42 @@ _DESIGNS_KEPT = 1024
 def content_hash(record: Record) -> str:
     """The sha256 of the record's canonical content: its JSON with keys sorted, without its
     submission id and assembler version, and without the later fields it leaves empty."""
-    dumped = record.model_dump(mode="json")
-    return _hash_of(dumped, _design_json(dumped))
+    try:
+        design_json: bytes | None = model_json(record.design)
+    except PydanticSerializationError:  # text UTF-8 cannot hold: the hash fails as it would
+        design_json = None
+    return _hash_of(record.model_dump(mode="json", exclude=_DESIGN), record.design, design_json)
 
 
-def json_and_hash(record: Record) -> tuple[str, str]:
+def json_and_hash(record: Record, design_json: bytes | None = None) -> tuple[str, str]:
     """The record's JSON as ``model_dump_json`` writes it, and its ``content_hash``: from one
-    dump of the record (what a board stores of a record, and checks it against)."""
-    dumped = record.model_dump(mode="json")
-    design = to_json(dumped["design"])
+    dump of the record (what a board stores of a record, and checks it against).
+    ``design_json``, when given, is ``model_json(record.design)``, written already."""
+    dumped = record.model_dump(mode="json", exclude=_DESIGN)
+    if design_json is None:
+        design_json = model_json(record.design)
     # An object's JSON is its members' in order, each "key":value, between braces and commas.
-    names = list(dumped)
+    names = list(type(record).model_fields)
     at = names.index("design")
     before = to_json({name: dumped[name] for name in names[:at]})
     after = to_json({name: dumped[name] for name in names[at + 1:]})
-    members = [before[1:-1], b'"design":' + design, after[1:-1]]
+    members = [before[1:-1], b'"design":' + design_json, after[1:-1]]
     text = b"{" + b",".join(member for member in members if member) + b"}"
-    return text.decode(), _hash_of(dumped, design)
+    return text.decode(), _hash_of(dumped, record.design, design_json)
 
 
-def _design_json(dumped: dict[str, Any]) -> bytes | None:
-    """The JSON of a dumped record's design (None: text UTF-8 cannot hold, which fails the hash
-    as it would)."""
-    try:
-        return to_json(dumped["design"])
-    except PydanticSerializationError:
-        return None
+_DESIGN = {"design"}
 
 
-def _hash_of(dumped: dict[str, Any], design_json: bytes | None) -> str:
-    """``content_hash`` of a record's ``model_dump(mode="json")``, which it takes apart, the
-    JSON of its design given."""
+def model_json(model: BaseModel) -> bytes:
+    """A part of a record (its design, ...) as its record's JSON writes it."""
+    return model.__pydantic_serializer__.to_json(model)
+
+
+def _hash_of(dumped: dict[str, Any], design: "Design", design_json: bytes | None) -> str:
+    """``content_hash`` of a record's ``model_dump(mode="json")`` without its design (which it
+    takes apart), its design and the design's JSON given."""
     del dumped["submission_id"], dumped["assembler_version"]
-    design = dumped.pop("design")
     for run in dumped["evaluations"]:
         _drop_empty(run, _LATER_RUN_FIELDS)
         for lap in run["laps"]:
@@ -515,13 +518,14 @@ def _hash_of(dumped: dict[str, Any], design_json: bytes | None) -> str:
     return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
 
 
-def _canonical_design(design: dict[str, Any], design_json: bytes | None) -> str:
-    """The canonical JSON of a dumped design, by its JSON (which tells every value apart, its
+def _canonical_design(design: "Design", design_json: bytes | None) -> str:
+    """The canonical JSON of a record's design, by its JSON (which tells every value apart, its
     type included, 1 from 1.0 and from true: one JSON, one canonical JSON)."""
     canonical = _DESIGNS.get(design_json) if design_json is not None else None
     if canonical is None:
-        _drop_empty(design, _LATER_DESIGN_FIELDS)
-        canonical = _CANONICAL.encode(design)
+        content = design.model_dump(mode="json")
+        _drop_empty(content, _LATER_DESIGN_FIELDS)
+        canonical = _CANONICAL.encode(content)
         if design_json is not None:
             if len(_DESIGNS) >= _DESIGNS_KEPT:
                 _DESIGNS.clear()

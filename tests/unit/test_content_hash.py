@@ -55,7 +55,8 @@ def edited(record: Record, **changes: Any) -> Record:
 def records() -> list[Record]:
     plain = make_record("Ada", [(9100, 100), (9300, 100), (9500, 99.5)])
     found = [assemble(folder) for folder in sorted(EXAMPLES.iterdir()) if folder.is_dir()]
-    return found + [
+    return [
+        *found,
         plain,
         make_record("Bob", [(9100, 100)]),  # the same design as Ada's: encoded once
         edited(plain, racer="Zoë ☃ 𝔘", model_name="naïve/model"),
@@ -95,3 +96,16 @@ def test_designs_that_differ_only_in_a_value_s_type_hash_apart() -> None:
     one = [edited(plain, design__hyperparameters__other={"x": value}) for value in (1, 1.0, True, "1")]
     assert len({content_hash(record) for record in one}) == 4
     assert [content_hash(record) for record in one] == [formula(record) for record in one]
+
+
+def test_text_utf_8_cannot_hold_fails_the_hash_as_the_formula_does() -> None:
+    """Validation refuses such text; a record put together without it still hashes as before."""
+    plain = make_record("Ada", [(9100, 100)])
+    half = "half \udc80 a character"
+    for lone in (plain.model_copy(update={"model_name": half}),
+                 plain.model_copy(update={"design": plain.design.model_copy(
+                     update={"neural_network": half})})):
+        with pytest.raises(UnicodeEncodeError):
+            formula(lone)
+        with pytest.raises(UnicodeEncodeError):
+            content_hash(lone)
