@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import errno
 import functools
+import gc
 import io
 import itertools
 import multiprocessing
@@ -35,11 +36,12 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
+from datetime import datetime
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, NamedTuple, TypeGuard
 
 from drboard_assembler.errors import field_path
-from drboard_assembler.record import RaceType
+from drboard_assembler.record import Design, RaceType, Record, model_json
 from drboard_functions.errors import DomainError
 from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, run_mismatches
 from drboard_functions.models.requests import ImportedSubmission
@@ -53,8 +55,11 @@ if TYPE_CHECKING:
     from drboard_functions.service import LeaderboardService
     from drboard_functions.service.loading import BulkImport, PreparedSubmission
 
-#: Prepares an exported submission for the board imported into (``BulkImport.prepare``).
-Prepare = Callable[[ImportedSubmission], "PreparedSubmission"]
+#: Prepares an exported submission (its record, its first time and, when known, the JSON of its
+#: design) for the board imported into (``loading.prepare_submission``).
+Prepare = Callable[[Record, datetime, "bytes | None"], "PreparedSubmission"]
+#: Archives a prepared submission's record, where the board archives (``BulkImport.keep``).
+Keep = Callable[[Record], None]
 
 #: Starts a phase of a long command, with its total (None: unknown): how to say it advanced.
 Phase = Callable[[str, int | None], Callable[[int], None]]
@@ -75,6 +80,7 @@ STDIN = "-"
 WRITE_BUFFER_BYTES = 1 << 20
 
 _LINE = TypeAdapter[ExportLine](ExportLine)
+_DESIGN = TypeAdapter[Design](Design)
 
 
 class BadExportFile(Exception):
@@ -245,7 +251,8 @@ def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board
     kept in a temporary file) before anything is written, then a transaction per batch."""
     size = _size(handle)
     bulk, exported, after = _opened(service, name, handle, board_id)
-    with _checking(name, exported, bulk, _chunks(name, handle, after), size) as checked:
+    with _cycles_collected_after(), _checking(name, exported, bulk, _chunks(name, handle, after),
+                                             size) as checked:
         counted = _counted(checked, phase("Checking the export", size))
         if bulk.holds_whole:
             with bulk.whole():
@@ -255,6 +262,20 @@ def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board
                 summary = _loaded(bulk, _checked_first(counted, spool), phase)
     summary.board = service.board_page(summary.board.board_id, 1, None).board
     return summary
+
+
+@contextmanager
+def _cycles_collected_after() -> Iterator[None]:
+    """Python's collector of reference cycles paused for the block (and in the workers it
+    starts): an import makes no cycles, and would have it walk every row of the batch in hand
+    again and again."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 class _Checked(NamedTuple):
@@ -339,16 +360,17 @@ def _checking(name: str, exported: Board, bulk: BulkImport, chunks: Iterator[lis
     while a batch is written: the first bad line in the file is still the one named. Worker
     processes start (with the first chunks) when the block is entered, by fork where this
     process runs no other thread (a fork copies no other thread's locks), else by spawn."""
-    workers = _workers(size)
-    if workers < 2 or bulk.archive is not None:  # an archive is written as each line is prepared
-        yield (_prepared_chunk(name, exported, bulk.prepare, chunk) for chunk in chunks)
-        return
     from drboard_functions.service.loading import prepare_submission
 
     prepare = functools.partial(prepare_submission, bulk.board)
+    workers = _workers(size)
+    if workers < 2 or bulk.archive is not None:  # an archive is written as each line is prepared
+        yield (_prepared_chunk(name, exported, prepare, chunk, bulk.keep) for chunk in chunks)
+        return
     check = functools.partial(_prepared_chunk, name, exported, prepare)
     start = "fork" if threading.active_count() == 1 and os.name == "posix" else "spawn"
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start))
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start),
+                               initializer=gc.disable)
     try:
         pending = deque(pool.submit(check, chunk)
                         for chunk in itertools.islice(chunks, _ahead(workers)))
@@ -409,27 +431,98 @@ def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, b
             yield number, raw
 
 
-def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
-                    chunk: list[tuple[int, bytes]]) -> _Checked:
+def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tuple[int, bytes]],
+                    keep: Keep | None = None) -> _Checked:
     """Check a chunk of an export's lines after its board line and prepare its submissions."""
     prepared: list[PreparedSubmission] = []
     entries = 0
     for number, raw in chunk:
         where = f"{name}:{number}"
-        line = _parsed(where, raw, IMPORT_CHECKS)
-        if isinstance(line, ExportedBoard):
-            raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
-        if isinstance(line, ExportedEntry):
-            entries += 1
-            continue
-        _check_submission(where, line, exported)
-        item = ImportedSubmission.model_construct(submitted_at=line.submission.submitted_at,
-                                                  record=line.record)
-        try:
-            prepared.append(prepare(item))
-        except DomainError as error:
-            raise BadExportFile(f"{where}: {_refusal(error)}") from None
+        submission = _SHARED_DESIGNS.prepared(where, raw, exported, prepare)
+        if submission is None:
+            line = _parsed(where, raw, IMPORT_CHECKS)
+            if isinstance(line, ExportedBoard):
+                raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
+            if isinstance(line, ExportedEntry):
+                entries += 1
+                continue
+            submission = line.record, _prepared_line(where, line, exported, prepare)
+        if keep is not None:
+            keep(submission[0])
+        prepared.append(submission[1])
     return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
+
+
+def _prepared_line(where: str, line: ExportedSubmission, exported: Board, prepare: Prepare,
+                   design_json: bytes | None = None) -> PreparedSubmission:
+    """Check a submission line for the exported board, and prepare it (BadExportFile)."""
+    _check_submission(where, line, exported)
+    try:
+        return prepare(line.record, line.submission.submitted_at, design_json)
+    except DomainError as error:
+        raise BadExportFile(f"{where}: {_refusal(error)}") from None
+
+
+class _SharedDesigns:
+    """The designs of an export's records, each read from its JSON once: records often share one
+    (a racer's models, the console's defaults), and a design is half of reading a record and
+    most of writing it. A submission line as drboard writes it is read without its record's
+    design, which is read (or found) on its own; the record so put together is taken only if
+    it writes back exactly the line's record, which reading the line whole then gives too.
+    Any other line, and a line with any problem, is read whole (which names the problem)."""
+
+    KEPT = 256
+
+    def __init__(self) -> None:
+        self.designs: dict[bytes, tuple[Design, bytes]] = {}
+
+    def prepared(self, where: str, raw: bytes, exported: Board,
+                 prepare: Prepare) -> tuple[Record, PreparedSubmission] | None:
+        """The line's record and its prepared submission, or None: read the line whole."""
+        parts = _record_parts(raw)
+        if parts is None:
+            return None
+        start, design_from, design_to = parts
+        try:
+            line = _LINE.validate_json(raw[:design_from] + b"{}" + raw[design_to:],
+                                       context=IMPORT_CHECKS)
+            design, design_json = self._design(raw[design_from:design_to])
+        except ValidationError:
+            return None
+        if not isinstance(line, ExportedSubmission):
+            return None
+        line = line.model_copy(update={"record": line.record.model_copy(update={"design": design})})
+        try:
+            prepared = _prepared_line(where, line, exported, prepare, design_json)
+        except BadExportFile:
+            return None
+        if prepared.row.record.encode() != raw.rstrip()[start:-1]:
+            return None
+        return line.record, prepared
+
+    def _design(self, raw: bytes) -> tuple[Design, bytes]:
+        found = self.designs.get(raw)
+        if found is None:
+            design = _DESIGN.validate_json(raw, context=IMPORT_CHECKS)
+            found = design, model_json(design)
+            if len(self.designs) >= self.KEPT:
+                self.designs.clear()
+            self.designs[raw] = found
+        return found
+
+
+def _record_parts(raw: bytes) -> tuple[int, int, int] | None:
+    """Where a submission line as drboard writes it (``Transfer.export_lines``) has its record
+    (from), and its record's design (from, to); None for a line of another form."""
+    start = raw.find(b'"record":')
+    design = raw.find(b',"design":', start) if start >= 0 else -1
+    training = raw.rfind(b',"training":', design) if design >= 0 else -1
+    if training < 0:
+        return None
+    return start + len(b'"record":'), design + len(b',"design":'), training
+
+
+_SHARED_DESIGNS = _SharedDesigns()
 
 
 def _refusal(error: DomainError) -> str:
@@ -484,13 +577,14 @@ def _check_submission(where: str, line: ExportedSubmission, board: Board) -> Non
 
 def _track_mismatch(track: str, direction: str | None, race_type: RaceType,
                     board: Board | BoardView) -> str:
-    problem = {
+    mismatches = run_mismatches(track, direction, race_type, board)
+    if not mismatches:
+        return ""
+    return {
         "track": f"track: {track} is not the board's track {board.track}",
         "direction": "direction: not the board's direction",
         "race_type": f"race_type: {race_type.value} is not the board's {board.race_type.value}",
-    }
-    mismatches = run_mismatches(track, direction, race_type, board)
-    return problem[mismatches[0]] if mismatches else ""
+    }[mismatches[0]]
 
 
 def _check_same_track(target: Board | BoardView, exported: Board) -> None:

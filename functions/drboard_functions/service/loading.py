@@ -28,10 +28,11 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from datetime import datetime
 from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
-from drboard_assembler.record import json_and_hash
+from drboard_assembler.record import Record, json_and_hash
 
 from .. import ranking
 from ..errors import InvalidSubmission, StoreBusy
@@ -71,23 +72,24 @@ class ImportTally(NamedTuple):
     duplicates: int
 
 
-def prepare_submission(board: Board, item: ImportedSubmission) -> PreparedSubmission:
-    """Check an exported submission for ``board`` (BoardMismatch, SubmissionTooLarge,
-    InvalidSubmission when its id is not its content's hash) and prepare what importing it
-    writes: reads and writes nothing."""
-    record = item.record
+def prepare_submission(board: Board, record: Record, submitted_at: datetime,
+                       design_json: bytes | None = None) -> PreparedSubmission:
+    """Check an exported submission (its record, first submitted at ``submitted_at``) for
+    ``board`` (BoardMismatch, SubmissionTooLarge, InvalidSubmission when its id is not its
+    content's hash) and prepare what importing it writes: reads and writes nothing.
+    ``design_json``, when given, is the record's design as the record's JSON writes it."""
     check_belongs(record, board)
-    stored, digest = json_and_hash(record)
+    stored, digest = json_and_hash(record, design_json)
     check_record_json_size(stored)
     if digest != record.submission_id:
         raise InvalidSubmission("the record's submission_id does not match its content",
                                 detail=[{"loc": "record.submission_id", "type": "value_error",
                                          "msg": "does not match the record's content"}])
-    submission, entry = scored_write(record, board, item.submitted_at)
+    submission, entry = scored_write(record, board, submitted_at)
     prints = run_prints(record)
     return PreparedSubmission(
         row=ImportedRow(submission_id=record.submission_id, racer_key=submission.racer_key,
-                        submitted_at=ranking.timestamp(item.submitted_at),
+                        submitted_at=ranking.timestamp(submitted_at),
                         score_key=entry.score_key, rank_key=entry.rank_key,
                         submission=submission.model_dump_json(), entry=entry.model_dump_json(),
                         record=stored),
@@ -117,9 +119,13 @@ class BulkImport:
     def prepare(self, item: ImportedSubmission) -> PreparedSubmission:
         """Check an exported submission for the board and prepare what importing it writes
         (``prepare_submission``); the record is archived too, where the board archives."""
-        prepared = prepare_submission(self.board, item)
-        keep_in_archive(self.archive, self.board.board_id, item.record)
+        prepared = prepare_submission(self.board, item.record, item.submitted_at)
+        self.keep(item.record)
         return prepared
+
+    def keep(self, record: Record) -> None:
+        """Archive a prepared submission's record, where the board archives records."""
+        keep_in_archive(self.archive, self.board.board_id, record)
 
     @property
     def holds_whole(self) -> bool:
