@@ -372,26 +372,43 @@ def _checking(name: str, exported: Board, bulk: BulkImport, chunks: Iterator[lis
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start),
                                initializer=gc.disable)
     try:
-        pending = deque(pool.submit(check, chunk)
-                        for chunk in itertools.islice(chunks, _ahead(workers)))
-        yield _in_order(pool, check, chunks, pending)
+        ahead = _Ahead(pool, check, chunks)
+        ahead.submit(IMPORT_BATCH // CHUNK_LINES + 2 * workers)
+        yield ahead.checked()
     finally:
         pool.shutdown(cancel_futures=True)
 
 
-def _ahead(workers: int) -> int:
-    """Chunks given to the workers ahead of the one written: a batch's, and two per worker."""
-    return IMPORT_BATCH // CHUNK_LINES + 2 * workers
+class _Ahead:
+    """Chunks given to the worker processes ahead of the one written (a batch's, and two per
+    worker, keep them busy while a batch is written), their results taken in the file's order.
+    A line that cannot be read (over the bound) is named once every line before it is checked:
+    the first bad line in the file is the one named."""
 
+    def __init__(self, pool: ProcessPoolExecutor, check: Callable[[list[tuple[int, bytes]]], _Checked],
+                 chunks: Iterator[list[tuple[int, bytes]]]) -> None:
+        self.pool = pool
+        self.check = check
+        self.chunks = chunks
+        self.pending: deque[Future[_Checked]] = deque()
+        self.unread: BadExportFile | None = None
 
-def _in_order(pool: ProcessPoolExecutor, check: Callable[[list[tuple[int, bytes]]], _Checked],
-              chunks: Iterator[list[tuple[int, bytes]]],
-              pending: deque[Future[_Checked]]) -> Iterator[_Checked]:
-    while pending:
-        done = pending.popleft().result()
-        for chunk in itertools.islice(chunks, 1):
-            pending.append(pool.submit(check, chunk))
-        yield done
+    def submit(self, count: int) -> None:
+        if self.unread is not None:
+            return
+        try:
+            for chunk in itertools.islice(self.chunks, count):
+                self.pending.append(self.pool.submit(self.check, chunk))
+        except BadExportFile as error:
+            self.unread = error
+
+    def checked(self) -> Iterator[_Checked]:
+        while self.pending:
+            done = self.pending.popleft().result()
+            self.submit(1)
+            yield done
+        if self.unread is not None:
+            raise self.unread
 
 
 def _workers(size: int | None) -> int:
