@@ -197,7 +197,8 @@ class _Lane:
         """Another racer's run whose laps are each within NEAR_MS of these, the first in the
         order the store reads them (by best lap, fingerprint, racer and board), or None."""
         best, slowest = laps[0], laps[-1]
-        found = [run for row in _cells_near(best) for column in _cells_near(slowest)
+        rows, columns = _cells_near(best), _cells_near(slowest)
+        found = [run for row in rows for column in columns
                  for run in self.cells.get((row, column), ())
                  if abs(run[4][0] - best) <= NEAR_MS and abs(run[4][-1] - slowest) <= NEAR_MS
                  and len(run[4]) == len(laps) and run[1] != racer_key and run[0] != fingerprint
@@ -205,9 +206,10 @@ class _Lane:
         return min(found, key=lambda run: (run[4][0], run[0], run[1], run[2])) if found else None
 
 
-def _cells_near(ms: int) -> range:
+def _cells_near(ms: int) -> tuple[int, ...]:
     """The cells of the times within NEAR_MS of ``ms``."""
-    return range((ms - NEAR_MS) // CELL_MS, (ms + NEAR_MS) // CELL_MS + 1)
+    low, high = (ms - NEAR_MS) // CELL_MS, (ms + NEAR_MS) // CELL_MS
+    return (low,) if low == high else (low, high)
 
 
 class _Replay:
@@ -242,22 +244,29 @@ class _Replay:
 
     def _import(self, prepared: PreparedSubmission) -> None:
         row = prepared.row
-        self._event("import", prepared.racer, row.submission_id)
-        for run in prepared.runs:
-            self._index(row, *run)
+        racer_key, submission_id = row.racer_key, row.submission_id
+        self._event("import", prepared.racer, submission_id)
+        for fingerprint, lane, laps in prepared.runs:
+            self._index(row, fingerprint, lane, laps)
         for fingerprint in prepared.fingerprints:
             if fingerprint not in self.fingerprint_holders:
-                self.fingerprint_holders[fingerprint] = row.racer_key
-                self.claims.append((fingerprint, row.racer_key))
+                self.fingerprint_holders[fingerprint] = racer_key
+                self.claims.append((fingerprint, racer_key))
         holder = self.skeleton_holders.get(prepared.skeleton)
         if holder is None:
-            self.skeleton_holders[prepared.skeleton] = row.racer_key
-            self.held.append((prepared.skeleton, row.racer_key))
-        elif holder != row.racer_key:
-            self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+            self.skeleton_holders[prepared.skeleton] = racer_key
+            self.held.append((prepared.skeleton, racer_key))
+        elif holder != racer_key:
+            self._flag((self.board_id, racer_key, submission_id), prepared.racer,
                        LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
-        for run in prepared.runs:
-            self._copies_of(prepared, *run)
+        for fingerprint, lane, laps in prepared.runs:  # its copies, and a near-copy it is
+            if len(self.authors[fingerprint]) > 1:
+                self._flag_copies(self.authors[fingerprint])
+            if laps:
+                near = self.load.lane(lane).copied(fingerprint, racer_key, laps)
+                if near is not None:
+                    self._flag((self.board_id, racer_key, submission_id), prepared.racer,
+                               NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
 
     def _index(self, row: ImportedRow, fingerprint: str, lane: str,
                laps: tuple[int, ...] | None) -> None:
@@ -276,21 +285,9 @@ class _Replay:
             self.load.lane(lane).add((fingerprint, row.racer_key, self.board_id,
                                       row.submission_id, laps))
 
-    def _copies_of(self, prepared: PreparedSubmission, fingerprint: str, lane: str,
-                   laps: tuple[int, ...] | None) -> None:
-        """As ``Transfer._copies_of``: the copies of the run (every author but its first, all of
-        them when the first are tied), and a near-copy of another racer's run."""
-        row = prepared.row
-        authors = self.authors[fingerprint]
-        if len(authors) > 1:
-            self._flag_copies(authors)
-        if laps:
-            near = self.load.lane(lane).copied(fingerprint, row.racer_key, laps)
-            if near is not None:
-                self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
-                           NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
-
     def _flag_copies(self, authors: dict[str, tuple[str, str, str]]) -> None:
+        """As ``Transfer._copies_of``: the copies of a run of several authors, every author
+        but its first (all of them when the first are tied)."""
         ordered = sorted(authors.items(), key=lambda author: author[1][0])
         first_racer, (first_at, first_board, _) = ordered[0]
         tied = [racer for racer, (at, _, _) in ordered if at == first_at]
