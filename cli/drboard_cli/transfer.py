@@ -43,7 +43,7 @@ from typing import IO, TYPE_CHECKING, Any, NamedTuple, TypeGuard
 from drboard_assembler.errors import field_path
 from drboard_assembler.record import Design, RaceType, Record, model_json
 from drboard_functions.errors import DomainError
-from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, run_mismatches
+from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, Submission, run_mismatches
 from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission, ExportLine
 from drboard_functions.models.views import BoardView
@@ -195,7 +195,7 @@ def check_export(name: str, handle: IO[bytes]) -> ExportContents:
         if isinstance(line, ExportedEntry):
             contents.entries += 1
         else:
-            _check_submission(where, line, contents.board)
+            _check_submission(where, line.submission, line.record, contents.board)
             contents.submissions += 1
     if contents is None:
         raise BadExportFile(f"{name}: the file is empty: an export starts with its board line")
@@ -463,19 +463,20 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tu
             if isinstance(line, ExportedEntry):
                 entries += 1
                 continue
-            submission = line.record, _prepared_line(where, line, exported, prepare)
+            submission = line.record, _prepared_line(where, line.submission, line.record,
+                                                     exported, prepare)
         if keep is not None:
             keep(submission[0])
         prepared.append(submission[1])
     return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
 
 
-def _prepared_line(where: str, line: ExportedSubmission, exported: Board, prepare: Prepare,
-                   design_json: bytes | None = None) -> PreparedSubmission:
+def _prepared_line(where: str, submission: Submission, record: Record, exported: Board,
+                   prepare: Prepare, design_json: bytes | None = None) -> PreparedSubmission:
     """Check a submission line for the exported board, and prepare it (BadExportFile)."""
-    _check_submission(where, line, exported)
+    _check_submission(where, submission, record, exported)
     try:
-        return prepare(line.record, line.submission.submitted_at, design_json)
+        return prepare(record, submission.submitted_at, design_json)
     except DomainError as error:
         raise BadExportFile(f"{where}: {_refusal(error)}") from None
 
@@ -508,14 +509,14 @@ class _SharedDesigns:
             return None
         if not isinstance(line, ExportedSubmission):
             return None
-        line = line.model_copy(update={"record": line.record.model_copy(update={"design": design})})
+        record = line.record.model_copy(update={"design": design})
         try:
-            prepared = _prepared_line(where, line, exported, prepare, design_json)
+            prepared = _prepared_line(where, line.submission, record, exported, prepare, design_json)
         except BadExportFile:
             return None
         if prepared.row.record.encode() != raw.rstrip()[start:-1]:
             return None
-        return line.record, prepared
+        return record, prepared
 
     def _design(self, raw: bytes) -> tuple[Design, bytes]:
         found = self.designs.get(raw)
@@ -580,8 +581,7 @@ def _problem(error: ValidationError) -> str:
     return f"{location}: {problem['msg'].removeprefix('Value error, ')}"
 
 
-def _check_submission(where: str, line: ExportedSubmission, board: Board) -> None:
-    submission, record = line.submission, line.record
+def _check_submission(where: str, submission: Submission, record: Record, board: Board) -> None:
     if submission.board_id != board.board_id:
         raise BadExportFile(f"{where}: submission.board_id: {submission.board_id!r} is not the "
                             f"exported board {board.board_id!r}")
