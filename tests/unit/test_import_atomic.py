@@ -13,6 +13,7 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
 
+import boto3
 import pytest
 from drboard_assembler.aliases import confusable_skeleton
 from drboard_cli import transfer
@@ -20,9 +21,13 @@ from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.service import LeaderboardService, scored_write
 from drboard_functions.service.loading import BulkImport
 from drboard_functions.stores.base import LookalikeTaken
+from drboard_functions.stores.dynamodb import DynamoDbStore
 from drboard_functions.stores.sqlite import SqliteStore
+from moto import mock_aws
 
+from tests.awskit import REGION
 from tests.recordkit import make_record
+from tests.tablekit import create_board_table
 
 TRACK_BOARD = "reInvent2019_track"
 RACERS = 30
@@ -206,3 +211,23 @@ def test_a_write_refused_inside_held_writes_undoes_only_itself(tmp_path: Path) -
     assert store.get_board(TRACK_BOARD).participants == 2  # type: ignore[union-attr]
     assert store.fingerprint_holder(TRACK_BOARD, "its-run") is None
     store.close()
+
+
+@pytest.mark.usefixtures("small_batches")
+def test_a_store_that_cannot_hold_an_import_has_every_line_checked_before_it_is_written(
+        exported: Path, tmp_path: Path) -> None:
+    """DynamoDB commits a batch at a time: nothing is written before the last line is read."""
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        service = LeaderboardService(DynamoDbStore(create_board_table(client, "boards"), client))
+        last = len(exported.read_bytes().splitlines())
+        good = exported.read_bytes()
+        spoiled(exported, last)
+        with exported.open("rb") as handle, pytest.raises(transfer.BadExportFile,
+                                                          match=rf"export\.jsonl:{last}: "):
+            transfer.load_export(service, str(exported), handle, None)
+        assert service.boards() == []
+        exported.write_bytes(good)
+        with exported.open("rb") as handle:
+            summary = transfer.load_export(service, str(exported), handle, None)
+        assert (summary.created, summary.board.participants) == (RACERS, RACERS)
