@@ -536,11 +536,12 @@ def _canonical_design(design: "Design", design_json: bytes | None) -> str:
 def _with_member(content: dict[str, Any], name: str, canonical: str) -> str:
     """The canonical JSON of ``content`` with one more member, ``name``, whose value's canonical
     JSON is given: an object's canonical JSON is its members' in the order of their keys, each
-    "key":value, between braces and commas."""
-    before = _CANONICAL.encode({key: value for key, value in content.items() if key < name})
-    after = _CANONICAL.encode({key: value for key, value in content.items() if key > name})
-    members = [before[1:-1], f"{_CANONICAL.encode(name)}:{canonical}", after[1:-1]]
-    return "{" + ",".join(member for member in members if member) + "}"
+    "key":value, between braces and commas; those before ``name`` open ``content``'s own."""
+    whole = _CANONICAL.encode(content)
+    head = _CANONICAL.encode({key: value for key, value in content.items() if key < name})[:-1]
+    tail = whole[len(head):].removeprefix(",")  # the members after ``name``, and the brace
+    member = f"{_CANONICAL.encode(name)}:{canonical}"
+    return "".join((head, "," if len(head) > 1 else "", member, "," if tail != "}" else "", tail))
 
 
 def _drop_empty(fields: dict[str, Any], names: tuple[str, ...]) -> None:

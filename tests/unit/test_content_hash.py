@@ -12,7 +12,14 @@ from typing import Any
 
 import pytest
 from drboard_assembler import assemble
-from drboard_assembler.record import Conditions, Lap, Record, content_hash, json_and_hash
+from drboard_assembler.record import (
+    Conditions,
+    Lap,
+    Record,
+    _with_member,
+    content_hash,
+    json_and_hash,
+)
 
 from tests.recordkit import make_record
 
@@ -109,3 +116,12 @@ def test_text_utf_8_cannot_hold_fails_the_hash_as_the_formula_does() -> None:
             formula(lone)
         with pytest.raises(UnicodeEncodeError):
             content_hash(lone)
+
+
+@pytest.mark.parametrize("content", [{}, {"a": 1}, {"z": [1]}, {"a": 1, "z": {"b": None}},
+                                     {"c": "x", "a": 1.5, "y": True, "e": "é"}])
+def test_a_member_added_to_canonical_json_lands_where_sorting_puts_it(content: dict[str, Any]) -> None:
+    value = {"k": [1, 2.0], "j": "v"}
+    canonical = json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    assert _with_member(content, "m", canonical) == json.dumps(
+        content | {"m": value}, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
