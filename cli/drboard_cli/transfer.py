@@ -230,8 +230,8 @@ def import_export(client: BoardClient, name: str, handle: IO[bytes], contents: E
 
 
 def loads_in_bulk(client: BoardClient) -> TypeGuard[LeaderboardService]:
-    """Whether the board runs in this process, where an import is checked whole, then written
-    in bulk; a board over HTTP takes the submissions one request each."""
+    """Whether the board runs in this process, where an import is written in bulk as its lines
+    are checked (``load_export``); a board over HTTP takes the submissions one request each."""
     from drboard_functions.service import LeaderboardService
 
     return isinstance(client, LeaderboardService)
