@@ -251,9 +251,10 @@ EXECUTEMANY_CHILD = textwrap.dedent("""
 """)
 
 #: `drboard import` of the export ``argv[1]`` into a new board file ``argv[2]``, as the command
-#: runs it on the embedded board (check and prepare every line, then write in bulk), timed from
-#: the start of the import (the interpreter's start and imports left out, as for its floor).
-#: Its CPU time includes the worker processes that check a big file's lines.
+#: runs it on the embedded board (every line checked and prepared, the submissions written in
+#: bulk as they are, in one transaction), timed from the start of the import (the interpreter's
+#: start and imports left out, as for its floor). Its CPU time includes the worker processes
+#: that check a big file's lines.
 IMPORT_CHILD = textwrap.dedent("""
     import json, resource, sys, time
     from pathlib import Path
@@ -748,8 +749,8 @@ def bench_import(report: Report, exported: Path, workdir: Path, label: str, runs
                           "one transaction",
                ratio_limit=IMPORT_VS_EXECUTEMANY_MAX_X,
                note=f"median of {runs} runs in turns (first run {first.wall:.1f} s); the import "
-                    "checks every record (schema, bounds, content hash, size) before it writes, "
-                    "on every core")
+                    "checks every record (schema, bounds, content hash, size) on every core "
+                    "while it writes them, in one transaction committed once all are checked")
     report.add(f"`drboard import` {label}: CPU time", times["import"].cpu, "s",
                floor=times["floor"].cpu, floor_name="the same executemany's CPU time",
                note="the import's own and its workers'")

@@ -5,21 +5,24 @@ its entries in rank order, then every submission with its full record. It is wri
 board gives it (straight from the store on the embedded board, a page at a time over HTTP), never
 held whole.
 
-An import first reads the whole file and checks every line; one bad line names the file, the line
-and the field, and nothing is imported. Then it creates the board (unless a board with that id
-exists: its own settings stay) and replays every submission with its first submission time. The
-target recomputes the entries from the submissions under its own rules: the export's entry lines
-are informative. A submission already on the board is a duplicate and changes nothing, so
-importing the same file twice is harmless. Into the embedded board, the check also prepares every
-submission and the board writes them in bulk (``load_export``); a board over HTTP takes them one
-request each (``check_export`` then ``import_export``).
+An import checks every line of the file; one bad line names the file, the line and the field,
+and nothing is imported. It creates the board (unless a board with that id exists: its own
+settings stay) and replays every submission with its first submission time. The target
+recomputes the entries from the submissions under its own rules: the export's entry lines are
+informative. A submission already on the board is a duplicate and changes nothing, so importing
+the same file twice is harmless. Into the embedded board, the check also prepares every
+submission and the board writes them in bulk as they are checked, all in one transaction that
+is committed only once the last line is checked (``load_export``); a board over HTTP takes them
+one request each, once the whole file is checked (``check_export`` then ``import_export``).
 """
 
 from __future__ import annotations
 
 import errno
 import functools
+import gc
 import io
+import itertools
 import multiprocessing
 import os
 import pickle
@@ -33,13 +36,14 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
+from datetime import datetime
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any, TypeGuard
+from typing import IO, TYPE_CHECKING, Any, NamedTuple, TypeGuard
 
 from drboard_assembler.errors import field_path
-from drboard_assembler.record import RaceType
+from drboard_assembler.record import Design, RaceType, Record, model_json
 from drboard_functions.errors import DomainError
-from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, run_mismatches
+from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, Submission, run_mismatches
 from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission, ExportLine
 from drboard_functions.models.views import BoardView
@@ -51,14 +55,17 @@ if TYPE_CHECKING:
     from drboard_functions.service import LeaderboardService
     from drboard_functions.service.loading import BulkImport, PreparedSubmission
 
-#: Prepares an exported submission for the board imported into (``BulkImport.prepare``).
-Prepare = Callable[[ImportedSubmission], "PreparedSubmission"]
+#: Prepares an exported submission (its record, its first time and, when known, the JSON of its
+#: design) for the board imported into (``loading.prepare_submission``).
+Prepare = Callable[[Record, datetime, "bytes | None"], "PreparedSubmission"]
+#: Archives a prepared submission's record, where the board archives (``BulkImport.keep``).
+Keep = Callable[[Record], None]
 
 #: Starts a phase of a long command, with its total (None: unknown): how to say it advanced.
 Phase = Callable[[str, int | None], Callable[[int], None]]
 
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
-#: Submissions an import in bulk writes in one transaction.
+#: Submissions an import in bulk replays and writes at a time.
 IMPORT_BATCH = 10_000
 #: Lines checked and prepared at a time.
 CHUNK_LINES = 500
@@ -73,6 +80,7 @@ STDIN = "-"
 WRITE_BUFFER_BYTES = 1 << 20
 
 _LINE = TypeAdapter[ExportLine](ExportLine)
+_DESIGN = TypeAdapter[Design](Design)
 
 
 class BadExportFile(Exception):
@@ -187,7 +195,7 @@ def check_export(name: str, handle: IO[bytes]) -> ExportContents:
         if isinstance(line, ExportedEntry):
             contents.entries += 1
         else:
-            _check_submission(where, line, contents.board)
+            _check_submission(where, line.submission, line.record, contents.board)
             contents.submissions += 1
     if contents is None:
         raise BadExportFile(f"{name}: the file is empty: an export starts with its board line")
@@ -222,8 +230,8 @@ def import_export(client: BoardClient, name: str, handle: IO[bytes], contents: E
 
 
 def loads_in_bulk(client: BoardClient) -> TypeGuard[LeaderboardService]:
-    """Whether the board runs in this process, where an import is checked whole, then written
-    in bulk; a board over HTTP takes the submissions one request each."""
+    """Whether the board runs in this process, where an import is written in bulk as its lines
+    are checked (``load_export``); a board over HTTP takes the submissions one request each."""
     from drboard_functions.service import LeaderboardService
 
     return isinstance(client, LeaderboardService)
@@ -231,34 +239,58 @@ def loads_in_bulk(client: BoardClient) -> TypeGuard[LeaderboardService]:
 
 def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
                 phase: Phase = lambda _, __: lambda _: None) -> ImportSummary:
-    """Import an export file in bulk: every line is read and checked, and every submission
-    prepared (kept in a temporary file), before anything is written; one bad line names the
-    file, the line and the field, and nothing is imported. Then the board is created (unless
-    it exists: its own settings stay) and the prepared submissions are written, IMPORT_BATCH
-    to a transaction. Each record is checked for its schema and bounds, its size and its
-    integrity (its submission id is its content's hash), as the board's stored records are:
-    not against today's rules of aliases, text, tracks and lap floors (`drboard board recheck`
-    flags the records those would refuse)."""
-    with tempfile.TemporaryFile() as spool:
-        bulk, entries, submissions = _prepare(service, name, handle, board_id, spool, phase)
-        view, created = bulk.open()
-        summary = ImportSummary(board=view, board_created=created, entry_lines=entries)
-        advance = phase("Importing submissions", submissions)
-        spool.seek(0)
-        for batch in _batches(spool):
-            tally = bulk.load(batch)
-            summary.created += tally.created
-            summary.duplicates += tally.duplicates
-            advance(len(batch))
-    summary.board = service.board_page(view.board_id, 1, None).board
+    """Import an export file in bulk, in one transaction: the board is created (unless it
+    exists: its own settings stay) and the submissions written IMPORT_BATCH at a time as their
+    lines are checked, and all of it is committed only once every line is checked and every
+    submission written; one bad line names the file, the line and the field, and the
+    transaction is rolled back: nothing is imported. Each record is checked for its schema and
+    bounds, its size and its integrity (its submission id is its content's hash), as the
+    board's stored records are: not against today's rules of aliases, text, tracks and lap
+    floors (`drboard board recheck` flags the records those would refuse). A store that cannot
+    hold an import in one transaction has every line checked (and every submission prepared,
+    kept in a temporary file) before anything is written, then a transaction per batch."""
+    size = _size(handle)
+    bulk, exported, after = _opened(service, name, handle, board_id)
+    with _cycles_collected_after(), _checking(name, exported, bulk, _chunks(name, handle, after),
+                                             size) as checked:
+        counted = _counted(checked, phase("Checking the export", size))
+        if bulk.holds_whole:
+            with bulk.whole():
+                summary = _loaded(bulk, counted, phase)
+        else:
+            with tempfile.TemporaryFile() as spool:
+                summary = _loaded(bulk, _checked_first(counted, spool), phase)
+    summary.board = service.board_page(summary.board.board_id, 1, None).board
     return summary
 
 
-def _prepare(service: LeaderboardService, name: str, handle: IO[bytes], board_id: str | None,
-             spool: IO[bytes], phase: Phase) -> tuple[BulkImport, int, int]:
-    """Check every line and prepare every submission into ``spool`` (a pickled list per chunk
-    of lines): the import, and how many entry and submission lines the file holds."""
-    advance = phase("Checking the export", _size(handle))
+@contextmanager
+def _cycles_collected_after() -> Iterator[None]:
+    """Python's collector of reference cycles paused for the block (and in the workers it
+    starts): an import makes no cycles, and would have it walk every row of the batch in hand
+    again and again."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+class _Checked(NamedTuple):
+    """A chunk of an export's lines checked: its prepared submissions, its entry lines, the
+    bytes read."""
+
+    prepared: list[PreparedSubmission]
+    entries: int
+    read: int
+
+
+def _opened(service: LeaderboardService, name: str, handle: IO[bytes],
+            board_id: str | None) -> tuple[BulkImport, Board, int]:
+    """The import of the export whose board line is read first: the import, the exported
+    board, and that line's number."""
     first = _first_line(name, handle)
     if first is None:
         raise BadExportFile(f"{name}: the file is empty: an export starts with its board line")
@@ -270,44 +302,113 @@ def _prepare(service: LeaderboardService, name: str, handle: IO[bytes], board_id
     board = _renamed(exported, board_id) if board_id and board_id != exported.board_id else exported
     bulk = service.bulk_import(board)
     _check_same_track(bulk.board, board)
-    entries = submissions = 0
-    chunks = _chunks(name, handle, number)
-    for pickled, counts, read in _checked(name, exported, bulk, chunks, _size(handle)):
-        spool.write(pickled)
-        entries += counts[0]
-        submissions += counts[1]
-        advance(read)
-    return bulk, entries, submissions
+    return bulk, exported, number
 
 
-def _checked(name: str, exported: Board, bulk: BulkImport,
-             chunks: Iterator[list[tuple[int, bytes]]],
-             size: int | None) -> Iterator[tuple[bytes, tuple[int, int], int]]:
+def _loaded(bulk: BulkImport, checked: Iterator[_Checked], phase: Phase) -> ImportSummary:
+    """Open the board, then write the checked submissions IMPORT_BATCH at a time."""
+    view, created = bulk.open()
+    summary = ImportSummary(board=view, board_created=created)
+    advance = phase("Importing submissions", None)
+    batch: list[PreparedSubmission] = []
+    for chunk in checked:
+        summary.entry_lines += chunk.entries
+        batch += chunk.prepared
+        while len(batch) >= IMPORT_BATCH:
+            _load(bulk, batch[:IMPORT_BATCH], summary, advance)
+            batch = batch[IMPORT_BATCH:]
+    if batch:
+        _load(bulk, batch, summary, advance)
+    return summary
+
+
+def _load(bulk: BulkImport, batch: list[PreparedSubmission], summary: ImportSummary,
+          advance: Callable[[int], None]) -> None:
+    tally = bulk.load(batch)
+    summary.created += tally.created
+    summary.duplicates += tally.duplicates
+    advance(len(batch))
+
+
+def _counted(checked: Iterator[_Checked], advance: Callable[[int], None]) -> Iterator[_Checked]:
+    for chunk in checked:
+        advance(chunk.read)
+        yield chunk
+
+
+def _checked_first(checked: Iterator[_Checked], spool: IO[bytes]) -> Iterator[_Checked]:
+    """Every chunk checked and kept in ``spool`` before the first is given back."""
+    for chunk in checked:
+        pickle.dump(chunk, spool, protocol=pickle.HIGHEST_PROTOCOL)
+    spool.seek(0)
+    return _unspooled(spool)
+
+
+def _unspooled(spool: IO[bytes]) -> Iterator[_Checked]:
+    while True:
+        try:
+            yield pickle.load(spool)
+        except EOFError:
+            return
+
+
+@contextmanager
+def _checking(name: str, exported: Board, bulk: BulkImport, chunks: Iterator[list[tuple[int, bytes]]],
+              size: int | None) -> Iterator[Iterator[_Checked]]:
     """Every chunk checked and prepared (``_prepared_chunk``), in the file's order. A big file's
-    chunks are checked in worker processes, one per core, a few chunks ahead: the first bad
-    line in the file is still the one named, and nothing is written before every line is
-    checked. Worker processes start by fork where this process runs no other thread (a fork
-    copies no other thread's locks), else by spawn."""
-    workers = _workers(size)
-    if workers < 2 or bulk.archive is not None:  # an archive is written as each line is prepared
-        for chunk in chunks:
-            yield _prepared_chunk(name, exported, bulk.prepare, chunk)
-        return
+    chunks are checked in worker processes, one per core, enough chunks ahead to keep them busy
+    while a batch is written: the first bad line in the file is still the one named. Worker
+    processes start (with the first chunks) when the block is entered, by fork where this
+    process runs no other thread (a fork copies no other thread's locks), else by spawn."""
     from drboard_functions.service.loading import prepare_submission
 
     prepare = functools.partial(prepare_submission, bulk.board)
+    workers = _workers(size)
+    if workers < 2 or bulk.archive is not None:  # an archive is written as each line is prepared
+        yield (_prepared_chunk(name, exported, prepare, chunk, bulk.keep) for chunk in chunks)
+        return
+    check = functools.partial(_prepared_chunk, name, exported, prepare)
     start = "fork" if threading.active_count() == 1 and os.name == "posix" else "spawn"
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start))
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start),
+                               initializer=gc.disable)
     try:
-        pending: deque[Future[tuple[bytes, tuple[int, int], int]]] = deque()
-        for chunk in chunks:
-            pending.append(pool.submit(_prepared_chunk, name, exported, prepare, chunk))
-            if len(pending) > 2 * workers:
-                yield pending.popleft().result()
-        while pending:
-            yield pending.popleft().result()
+        ahead = _Ahead(pool, check, chunks)
+        ahead.submit(IMPORT_BATCH // CHUNK_LINES + 2 * workers)
+        yield ahead.checked()
     finally:
         pool.shutdown(cancel_futures=True)
+
+
+class _Ahead:
+    """Chunks given to the worker processes ahead of the one written (a batch's, and two per
+    worker, keep them busy while a batch is written), their results taken in the file's order.
+    A line that cannot be read (over the bound) is named once every line before it is checked:
+    the first bad line in the file is the one named."""
+
+    def __init__(self, pool: ProcessPoolExecutor, check: Callable[[list[tuple[int, bytes]]], _Checked],
+                 chunks: Iterator[list[tuple[int, bytes]]]) -> None:
+        self.pool = pool
+        self.check = check
+        self.chunks = chunks
+        self.pending: deque[Future[_Checked]] = deque()
+        self.unread: BadExportFile | None = None
+
+    def submit(self, count: int) -> None:
+        if self.unread is not None:
+            return
+        try:
+            for chunk in itertools.islice(self.chunks, count):
+                self.pending.append(self.pool.submit(self.check, chunk))
+        except BadExportFile as error:
+            self.unread = error
+
+    def checked(self) -> Iterator[_Checked]:
+        while self.pending:
+            done = self.pending.popleft().result()
+            self.submit(1)
+            yield done
+        if self.unread is not None:
+            raise self.unread
 
 
 def _workers(size: int | None) -> int:
@@ -316,21 +417,6 @@ def _workers(size: int | None) -> int:
         return 1
     cores = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else range(os.cpu_count() or 1)
     return len(cores)
-
-
-def _batches(spool: IO[bytes]) -> Iterator[list[PreparedSubmission]]:
-    """The prepared submissions, IMPORT_BATCH at a time (the last batch may be smaller)."""
-    batch: list[PreparedSubmission] = []
-    while True:
-        try:
-            batch += pickle.load(spool)
-        except EOFError:
-            break
-        while len(batch) >= IMPORT_BATCH:
-            yield batch[:IMPORT_BATCH]
-            batch = batch[IMPORT_BATCH:]
-    if batch:
-        yield batch
 
 
 def _first_line(name: str, handle: IO[bytes]) -> tuple[int, ExportLine] | None:
@@ -362,29 +448,99 @@ def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, b
             yield number, raw
 
 
-def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
-                    chunk: list[tuple[int, bytes]]) -> tuple[bytes, tuple[int, int], int]:
-    """Check a chunk of an export's lines after its board line and prepare its submissions:
-    the pickled list of them, the (entry, submission) lines counted, and the bytes read."""
+def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tuple[int, bytes]],
+                    keep: Keep | None = None) -> _Checked:
+    """Check a chunk of an export's lines after its board line and prepare its submissions."""
     prepared: list[PreparedSubmission] = []
     entries = 0
     for number, raw in chunk:
         where = f"{name}:{number}"
-        line = _parsed(where, raw, IMPORT_CHECKS)
-        if isinstance(line, ExportedBoard):
-            raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
-        if isinstance(line, ExportedEntry):
-            entries += 1
-            continue
-        _check_submission(where, line, exported)
-        item = ImportedSubmission.model_construct(submitted_at=line.submission.submitted_at,
-                                                  record=line.record)
+        submission = _SHARED_DESIGNS.prepared(where, raw, exported, prepare)
+        if submission is None:
+            line = _parsed(where, raw, IMPORT_CHECKS)
+            if isinstance(line, ExportedBoard):
+                raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
+            if isinstance(line, ExportedEntry):
+                entries += 1
+                continue
+            submission = line.record, _prepared_line(where, line.submission, line.record,
+                                                     exported, prepare)
+        if keep is not None:
+            keep(submission[0])
+        prepared.append(submission[1])
+    return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
+
+
+def _prepared_line(where: str, submission: Submission, record: Record, exported: Board,
+                   prepare: Prepare, design_json: bytes | None = None) -> PreparedSubmission:
+    """Check a submission line for the exported board, and prepare it (BadExportFile)."""
+    _check_submission(where, submission, record, exported)
+    try:
+        return prepare(record, submission.submitted_at, design_json)
+    except DomainError as error:
+        raise BadExportFile(f"{where}: {_refusal(error)}") from None
+
+
+class _SharedDesigns:
+    """The designs of an export's records, each read from its JSON once: records often share one
+    (a racer's models, the console's defaults), and a design is half of reading a record and
+    most of writing it. A submission line as drboard writes it is read without its record's
+    design, which is read (or found) on its own; the record so put together is taken only if
+    it writes back exactly the line's record, which reading the line whole then gives too.
+    Any other line, and a line with any problem, is read whole (which names the problem)."""
+
+    KEPT = 256
+
+    def __init__(self) -> None:
+        self.designs: dict[bytes, tuple[Design, bytes]] = {}
+
+    def prepared(self, where: str, raw: bytes, exported: Board,
+                 prepare: Prepare) -> tuple[Record, PreparedSubmission] | None:
+        """The line's record and its prepared submission, or None: read the line whole."""
+        parts = _record_parts(raw)
+        if parts is None:
+            return None
+        start, design_from, design_to = parts
         try:
-            prepared.append(prepare(item))
-        except DomainError as error:
-            raise BadExportFile(f"{where}: {_refusal(error)}") from None
-    return (pickle.dumps(prepared, protocol=pickle.HIGHEST_PROTOCOL), (entries, len(prepared)),
-            sum(len(raw) for _, raw in chunk))
+            line = _LINE.validate_json(raw[:design_from] + b"{}" + raw[design_to:],
+                                       context=IMPORT_CHECKS)
+            design, design_json = self._design(raw[design_from:design_to])
+        except ValidationError:
+            return None
+        if not isinstance(line, ExportedSubmission):
+            return None
+        record = line.record.model_copy(update={"design": design})
+        try:
+            prepared = _prepared_line(where, line.submission, record, exported, prepare, design_json)
+        except BadExportFile:
+            return None
+        if prepared.row.record.encode() != raw.rstrip()[start:-1]:
+            return None
+        return record, prepared
+
+    def _design(self, raw: bytes) -> tuple[Design, bytes]:
+        found = self.designs.get(raw)
+        if found is None:
+            design = _DESIGN.validate_json(raw, context=IMPORT_CHECKS)
+            found = design, model_json(design)
+            if len(self.designs) >= self.KEPT:
+                self.designs.clear()
+            self.designs[raw] = found
+        return found
+
+
+def _record_parts(raw: bytes) -> tuple[int, int, int] | None:
+    """Where a submission line as drboard writes it (``Transfer.export_lines``) has its record
+    (from), and its record's design (from, to); None for a line of another form."""
+    start = raw.find(b'"record":')
+    design = raw.find(b',"design":', start) if start >= 0 else -1
+    training = raw.rfind(b',"training":', design) if design >= 0 else -1
+    if training < 0:
+        return None
+    return start + len(b'"record":'), design + len(b',"design":'), training
+
+
+_SHARED_DESIGNS = _SharedDesigns()
 
 
 def _refusal(error: DomainError) -> str:
@@ -425,8 +581,7 @@ def _problem(error: ValidationError) -> str:
     return f"{location}: {problem['msg'].removeprefix('Value error, ')}"
 
 
-def _check_submission(where: str, line: ExportedSubmission, board: Board) -> None:
-    submission, record = line.submission, line.record
+def _check_submission(where: str, submission: Submission, record: Record, board: Board) -> None:
     if submission.board_id != board.board_id:
         raise BadExportFile(f"{where}: submission.board_id: {submission.board_id!r} is not the "
                             f"exported board {board.board_id!r}")
@@ -439,13 +594,14 @@ def _check_submission(where: str, line: ExportedSubmission, board: Board) -> Non
 
 def _track_mismatch(track: str, direction: str | None, race_type: RaceType,
                     board: Board | BoardView) -> str:
-    problem = {
+    mismatches = run_mismatches(track, direction, race_type, board)
+    if not mismatches:
+        return ""
+    return {
         "track": f"track: {track} is not the board's track {board.track}",
         "direction": "direction: not the board's direction",
         "race_type": f"race_type: {race_type.value} is not the board's {board.race_type.value}",
-    }
-    mismatches = run_mismatches(track, direction, race_type, board)
-    return problem[mismatches[0]] if mismatches else ""
+    }[mismatches[0]]
 
 
 def _check_same_track(target: Board | BoardView, exported: Board) -> None:

@@ -5,6 +5,7 @@ SQLite and on DynamoDB (moto)."""
 
 from __future__ import annotations
 
+import random
 from collections.abc import Iterator, Sequence
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -14,11 +15,11 @@ import boto3
 import pytest
 from drboard_assembler.record import Record
 from drboard_functions.errors import BoardMismatch, InvalidSubmission, SubmissionTooLarge
-from drboard_functions.models.domain import Board
+from drboard_functions.models.domain import Board, NearRun
 from drboard_functions.models.requests import BoardSpec, ImportedSubmission
 from drboard_functions.service import LeaderboardService, racer_key
-from drboard_functions.service.copies import run_prints
-from drboard_functions.service.loading import ImportTally
+from drboard_functions.service.copies import NEAR_MS, run_prints, same_laps
+from drboard_functions.service.loading import ImportTally, _Lane
 from drboard_functions.stores.base import BoardStore
 from drboard_functions.stores.dynamodb import DynamoDbStore
 from drboard_functions.stores.sqlite import SqliteStore
@@ -198,3 +199,44 @@ def test_records_of_many_runs_are_imported_with_every_claim(tmp_path: Path, kind
         held, _ = store.holders(FINALS, prints, [])
         assert len(prints) == 130 and len(held) == 130
         assert store.get_board(FINALS).participants == 13  # type: ignore[union-attr]
+
+
+
+def near_run(rng: random.Random, n: int) -> NearRun:
+    best = rng.randint(9000, 9060)
+    return NearRun(fingerprint=f"f{n % 50}", racer_key=f"r{n % 40}", board_id=f"b{n % 2}",
+                   submission_id=f"s{n}", laps_ms=sorted([best, best + rng.randint(0, 40),
+                                                         best + rng.randint(0, 40)]))
+
+
+def store_order(run: NearRun) -> tuple[int, str, str, str]:
+    return run.laps_ms[0], run.fingerprint, run.racer_key, run.board_id
+
+
+def test_a_lane_finds_the_near_copy_looking_at_every_run_finds() -> None:
+    """A lane keeps its runs by cells of their best and slowest laps: a run finds there what
+    looking at every run finds, the first in the store's order."""
+    rng = random.Random(7)
+    runs = sorted((near_run(rng, n) for n in range(600)), key=store_order)
+    lane = _Lane(runs)
+    kept: dict[tuple[int, str, str, str], NearRun] = {}
+    for run in runs:  # the first of a best lap, fingerprint, racer and board
+        kept.setdefault(store_order(run), run)
+    for probe in (near_run(rng, n) for n in range(1000, 1400)):
+        laps = tuple(probe.laps_ms)
+        first = min((run for run in kept.values() if run.racer_key != probe.racer_key
+                     and run.fingerprint != probe.fingerprint and same_laps(list(laps), run.laps_ms)),
+                    key=store_order, default=None)
+        found = lane.copied(probe.fingerprint, probe.racer_key, laps)
+        assert (found[3] if found else None) == (first.submission_id if first else None)
+
+
+@pytest.mark.parametrize(("laps", "near"), [
+    ((10004, 10015, 10025), True), ((9994, 10005, 10015), True), ((10005, 10016, 10026), False),
+    ((9993, 10004, 10014), False), ((10004, 10015, 10026), False),
+])
+def test_laps_near_ms_apart_meet_across_a_cell_s_edge(laps: tuple[int, ...], near: bool) -> None:
+    assert NEAR_MS == 5
+    lane = _Lane([NearRun(fingerprint="x", racer_key="a", board_id="b", submission_id="s",
+                          laps_ms=[9999, 10010, 10020])])
+    assert (lane.copied("y", "c", laps) is not None) is near

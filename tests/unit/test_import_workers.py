@@ -109,3 +109,24 @@ def test_a_bad_line_checked_in_a_worker_is_named_and_nothing_is_written(
         imported(exported, tmp_path / "target.db")
     assert rows(tmp_path / "target.db")["submissions"] == []
     assert rows(tmp_path / "target.db")["boards"] == []
+
+
+@pytest.mark.usefixtures("in_workers")
+def test_a_bad_line_before_one_over_the_bound_is_the_one_named(
+        exported: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The workers are given lines far ahead of the one checked: a line too long to read among
+    them waits its turn."""
+    lines = exported.read_bytes().splitlines(keepends=True)
+    bad, long = len(lines) - 30, len(lines) - 3
+    head, record = lines[bad - 1].split(b'"record":', 1)
+    lines[bad - 1] = head + b'"record":' + record.replace(b'"time_ms":', b'"time_ms":-', 1)
+    lines[long - 1] = lines[long - 1].rstrip() + b" " * 5000 + b"\n"
+    exported.write_bytes(b"".join(lines))
+    monkeypatch.setattr(transfer, "MAX_LINE_BYTES", 4000)
+    with pytest.raises(transfer.BadExportFile, match=rf"export\.jsonl:{bad}: record\.evaluations"):
+        imported(exported, tmp_path / "target.db")
+    lines[bad - 1] = head + b'"record":' + record
+    exported.write_bytes(b"".join(lines))
+    with pytest.raises(transfer.BadExportFile, match=rf"export\.jsonl:{long}: the line is over"):
+        imported(exported, tmp_path / "target.db")
+    assert rows(tmp_path / "target.db")["submissions"] == []

@@ -309,7 +309,7 @@ def import_command(ctx: Context, source: str, board_id: str | None) -> None:
     field, and nothing is imported. The board is created unless it exists (then its own settings
     stay); every submission is replayed with its first submission time, and the entries are
     recomputed under the board's rules. On the embedded board the submissions are written in
-    bulk, a batch to a transaction.
+    bulk as the lines are checked, all in one transaction.
     """
     from .. import render, transfer
 

@@ -1,6 +1,9 @@
 """A board's export imported in bulk (`drboard import` on the embedded board): every exported
-submission is checked and prepared once — what importing it writes — before anything is
-written; then the prepared submissions are written a batch at a time, one transaction each.
+submission is checked and prepared once — what importing it writes —, and the prepared
+submissions are written a batch at a time. Where the store can hold a whole import in one
+transaction (``whole``: the embedded board), the batches are written in it as the lines are
+checked, and nothing is kept unless every line passes; elsewhere every submission is checked
+before anything is written, and each batch is a transaction of its own.
 
 A batch writes what replaying its submissions one by one would (``Transfer.import_submission``):
 each submission not on the board yet, scored by the board's rules, the racer's entry when it is
@@ -23,11 +26,13 @@ record's schema and bounds are the caller's to check, as for every record the se
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from datetime import datetime
 from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
-from drboard_assembler.record import content_hash
+from drboard_assembler.record import Record, json_and_hash
 
 from .. import ranking
 from ..errors import InvalidSubmission, StoreBusy
@@ -35,10 +40,10 @@ from ..identity import Caller
 from ..models.domain import AuditEvent, Board, Entry, NearRun, Submission, with_flag
 from ..models.requests import ImportedSubmission
 from ..models.views import BoardView
-from ..stores.base import ImportBatch, ImportedRow, IndexedRun, RecordArchive
+from ..stores.base import HeldWrites, ImportBatch, ImportedRow, IndexedRun, RecordArchive
 from .boards import BoardKeeper, check_belongs
 from .copies import COPIED, LOOKALIKE, NEAR_COPY, NEAR_MS, run_prints, same_laps
-from .pushing import check_record_size, keep_in_archive, scored_write
+from .pushing import check_record_json_size, keep_in_archive, scored_write
 
 if TYPE_CHECKING:
     from .transfer import Transfer
@@ -67,22 +72,24 @@ class ImportTally(NamedTuple):
     duplicates: int
 
 
-def prepare_submission(board: Board, item: ImportedSubmission) -> PreparedSubmission:
-    """Check an exported submission for ``board`` (BoardMismatch, SubmissionTooLarge,
-    InvalidSubmission when its id is not its content's hash) and prepare what importing it
-    writes: reads and writes nothing."""
-    record = item.record
+def prepare_submission(board: Board, record: Record, submitted_at: datetime,
+                       design_json: bytes | None = None) -> PreparedSubmission:
+    """Check an exported submission (its record, first submitted at ``submitted_at``) for
+    ``board`` (BoardMismatch, SubmissionTooLarge, InvalidSubmission when its id is not its
+    content's hash) and prepare what importing it writes: reads and writes nothing.
+    ``design_json``, when given, is the record's design as the record's JSON writes it."""
     check_belongs(record, board)
-    stored = check_record_size(record)
-    if content_hash(record) != record.submission_id:
+    stored, digest = json_and_hash(record, design_json)
+    check_record_json_size(stored)
+    if digest != record.submission_id:
         raise InvalidSubmission("the record's submission_id does not match its content",
                                 detail=[{"loc": "record.submission_id", "type": "value_error",
                                          "msg": "does not match the record's content"}])
-    submission, entry = scored_write(record, board, item.submitted_at)
+    submission, entry = scored_write(record, board, submitted_at)
     prints = run_prints(record)
     return PreparedSubmission(
         row=ImportedRow(submission_id=record.submission_id, racer_key=submission.racer_key,
-                        submitted_at=ranking.timestamp(item.submitted_at),
+                        submitted_at=ranking.timestamp(submitted_at),
                         score_key=entry.score_key, rank_key=entry.rank_key,
                         submission=submission.model_dump_json(), entry=entry.model_dump_json(),
                         record=stored),
@@ -112,9 +119,27 @@ class BulkImport:
     def prepare(self, item: ImportedSubmission) -> PreparedSubmission:
         """Check an exported submission for the board and prepare what importing it writes
         (``prepare_submission``); the record is archived too, where the board archives."""
-        prepared = prepare_submission(self.board, item)
-        keep_in_archive(self.archive, self.board.board_id, item.record)
+        prepared = prepare_submission(self.board, item.record, item.submitted_at)
+        self.keep(item.record)
         return prepared
+
+    def keep(self, record: Record) -> None:
+        """Archive a prepared submission's record, where the board archives records."""
+        keep_in_archive(self.archive, self.board.board_id, record)
+
+    @property
+    def holds_whole(self) -> bool:
+        """Whether the store can hold the whole import in one transaction (``whole``)."""
+        return isinstance(self.store, HeldWrites)
+
+    @contextmanager
+    def whole(self) -> Iterator[None]:
+        """Every write of the import made in the block (``open``, ``load``) in one transaction:
+        committed when the block ends, none of them kept when it raises."""
+        if not isinstance(self.store, HeldWrites):
+            raise TypeError("the store cannot hold an import in one transaction")
+        with self.store.held_writes():
+            yield
 
     def open(self) -> tuple[BoardView, bool]:
         """Create the board unless it exists (as ``import_board``); whether it was created."""
@@ -144,35 +169,47 @@ class BulkImport:
                             "checked; import it again")
 
 
+#: The side of a cell of a lane's runs, in milliseconds: the runs whose best and slowest laps
+#: are each within NEAR_MS of a run's lie in at most two cells each way.
+CELL_MS = 2 * NEAR_MS + 1
+
+
 class _Lane:
-    """The indexed runs of a lane, by best lap, each once per fingerprint, racer and board, as
-    (fingerprint, racer key, board id, submission id, sorted complete laps)."""
+    """The indexed runs of a lane, each once per best lap, fingerprint, racer and board, as
+    (fingerprint, racer key, board id, submission id, sorted complete laps), by the cell of
+    their best and slowest laps."""
 
     def __init__(self, runs: Sequence[NearRun]) -> None:
-        #: Best lap -> the runs with it, each beside its slowest lap (most runs a best lap
-        #: finds are told apart by their slowest, so that is compared first).
-        self.by_best: dict[int, list[tuple[int, NearTuple]]] = {}
+        self.cells: dict[tuple[int, int], list[NearTuple]] = {}
         self.keys: set[tuple[int, str, str, str]] = set()
         for run in runs:
             self.add((run.fingerprint, run.racer_key, run.board_id, run.submission_id,
                       tuple(run.laps_ms)))
 
     def add(self, run: NearTuple) -> None:
-        key = (run[4][0], run[0], run[1], run[2])
+        laps = run[4]
+        key = (laps[0], run[0], run[1], run[2])
         if key not in self.keys:
             self.keys.add(key)
-            self.by_best.setdefault(run[4][0], []).append((run[4][-1], run))
+            self.cells.setdefault((laps[0] // CELL_MS, laps[-1] // CELL_MS), []).append(run)
 
     def copied(self, fingerprint: str, racer_key: str, laps: tuple[int, ...]) -> NearTuple | None:
         """Another racer's run whose laps are each within NEAR_MS of these, the first in the
         order the store reads them (by best lap, fingerprint, racer and board), or None."""
-        slowest = laps[-1]
-        found = [run for best in range(laps[0] - NEAR_MS, laps[0] + NEAR_MS + 1)
-                 for other_slowest, run in self.by_best.get(best, ())
-                 if -NEAR_MS <= other_slowest - slowest <= NEAR_MS and len(run[4]) == len(laps)
-                 and run[1] != racer_key and run[0] != fingerprint
+        best, slowest = laps[0], laps[-1]
+        rows, columns = _cells_near(best), _cells_near(slowest)
+        found = [run for row in rows for column in columns
+                 for run in self.cells.get((row, column), ())
+                 if abs(run[4][0] - best) <= NEAR_MS and abs(run[4][-1] - slowest) <= NEAR_MS
+                 and len(run[4]) == len(laps) and run[1] != racer_key and run[0] != fingerprint
                  and same_laps(list(laps), list(run[4]))]
         return min(found, key=lambda run: (run[4][0], run[0], run[1], run[2])) if found else None
+
+
+def _cells_near(ms: int) -> tuple[int, ...]:
+    """The cells of the times within NEAR_MS of ``ms``."""
+    low, high = (ms - NEAR_MS) // CELL_MS, (ms + NEAR_MS) // CELL_MS
+    return (low,) if low == high else (low, high)
 
 
 class _Replay:
@@ -207,22 +244,29 @@ class _Replay:
 
     def _import(self, prepared: PreparedSubmission) -> None:
         row = prepared.row
-        self._event("import", prepared.racer, row.submission_id)
+        racer_key, submission_id = row.racer_key, row.submission_id
+        self._event("import", prepared.racer, submission_id)
         for fingerprint, lane, laps in prepared.runs:
             self._index(row, fingerprint, lane, laps)
         for fingerprint in prepared.fingerprints:
             if fingerprint not in self.fingerprint_holders:
-                self.fingerprint_holders[fingerprint] = row.racer_key
-                self.claims.append((fingerprint, row.racer_key))
+                self.fingerprint_holders[fingerprint] = racer_key
+                self.claims.append((fingerprint, racer_key))
         holder = self.skeleton_holders.get(prepared.skeleton)
         if holder is None:
-            self.skeleton_holders[prepared.skeleton] = row.racer_key
-            self.held.append((prepared.skeleton, row.racer_key))
-        elif holder != row.racer_key:
-            self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+            self.skeleton_holders[prepared.skeleton] = racer_key
+            self.held.append((prepared.skeleton, racer_key))
+        elif holder != racer_key:
+            self._flag((self.board_id, racer_key, submission_id), prepared.racer,
                        LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
-        for fingerprint, lane, laps in prepared.runs:
-            self._copies_of(prepared, fingerprint, lane, laps)
+        for fingerprint, lane, laps in prepared.runs:  # its copies, and a near-copy it is
+            if len(self.authors[fingerprint]) > 1:
+                self._flag_copies(self.authors[fingerprint])
+            if laps:
+                near = self.load.lane(lane).copied(fingerprint, racer_key, laps)
+                if near is not None:
+                    self._flag((self.board_id, racer_key, submission_id), prepared.racer,
+                               NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
 
     def _index(self, row: ImportedRow, fingerprint: str, lane: str,
                laps: tuple[int, ...] | None) -> None:
@@ -230,7 +274,9 @@ class _Replay:
         and its laps for near-copies (once per racer and board)."""
         self.runs.append(IndexedRun(fingerprint, lane, laps, row.racer_key, row.submitted_at,
                                     row.submission_id))
-        authors = self.authors.setdefault(fingerprint, {})
+        authors = self.authors.get(fingerprint)
+        if authors is None:
+            authors = self.authors[fingerprint] = {}
         mine = authors.get(row.racer_key)
         # Timestamps of one fixed width, in UTC: as text, they sort in time order.
         if mine is None or row.submitted_at < mine[0]:
@@ -239,24 +285,15 @@ class _Replay:
             self.load.lane(lane).add((fingerprint, row.racer_key, self.board_id,
                                       row.submission_id, laps))
 
-    def _copies_of(self, prepared: PreparedSubmission, fingerprint: str, lane: str,
-                   laps: tuple[int, ...] | None) -> None:
-        """As ``Transfer._copies_of``: the copies of the run (every author but its first, all of
-        them when the first are tied), and a near-copy of another racer's run."""
-        row = prepared.row
-        authors = self.authors[fingerprint]
-        if len(authors) > 1:
-            ordered = sorted(authors.items(), key=lambda author: author[1][0])
-            first_racer, (first_at, first_board, _) = ordered[0]
-            tied = [racer for racer, (at, _, _) in ordered if at == first_at]
-            for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
-                self._flag((board_id, racer, submission_id), None, COPIED,
-                           f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
-        if laps:
-            near = self.load.lane(lane).copied(fingerprint, row.racer_key, laps)
-            if near is not None:
-                self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
-                           NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
+    def _flag_copies(self, authors: dict[str, tuple[str, str, str]]) -> None:
+        """As ``Transfer._copies_of``: the copies of a run of several authors, every author
+        but its first (all of them when the first are tied)."""
+        ordered = sorted(authors.items(), key=lambda author: author[1][0])
+        first_racer, (first_at, first_board, _) = ordered[0]
+        tied = [racer for racer, (at, _, _) in ordered if at == first_at]
+        for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
+            self._flag((board_id, racer, submission_id), None, COPIED,
+                       f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
 
     def _flag(self, where: Where, racer: str | None, flag: str, why: str) -> None:
         """Flag a run once: this batch's when it writes it, another's after the batch."""

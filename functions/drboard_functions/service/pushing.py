@@ -303,7 +303,11 @@ def check_record_size(record: Record) -> str:
     """Every board, embedded or in the cloud, holds a record to the same bound in bytes (its
     JSON, as the assembler measures it); the record's model bounds the rest (string lengths,
     laps, runs, curve points). Returns that JSON."""
-    text = record.model_dump_json()
+    return check_record_json_size(record.model_dump_json())
+
+
+def check_record_json_size(text: str) -> str:
+    """``check_record_size`` of a record's JSON (``model_dump_json``'s) already written."""
     size = len(text.encode("utf-8"))
     if size > MAX_RECORD_BYTES:
         raise SubmissionTooLarge(f"the record is {size} bytes, over the {MAX_RECORD_BYTES} "

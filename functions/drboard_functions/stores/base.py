@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator, Mapping, Sequence
+from contextlib import AbstractContextManager
 from datetime import datetime
-from typing import TYPE_CHECKING, NamedTuple, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol, runtime_checkable
 
 from drboard_assembler.record import Record
 
@@ -202,6 +203,15 @@ class ImportBatch(NamedTuple):
 class ImportWritten(NamedTuple):
     created: int  # submissions stored (those already on the board are left as they are)
     improved: int  # entries made or bettered
+
+
+@runtime_checkable
+class HeldWrites(Protocol):
+    """A store that can hold a whole import in one transaction (the embedded board)."""
+
+    def held_writes(self) -> AbstractContextManager[None]:
+        """Every write the calling thread makes in the block, in one transaction: committed
+        when the block ends, none of them kept when it raises."""
 
 
 def new_rows(rows: Sequence[ImportedRow], present: set[str]) -> list[ImportedRow]:

@@ -265,8 +265,12 @@ class SqliteStore(SqliteSeasons):
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
-        """One write transaction. Another process holding the board past the busy timeout
-        is StoreBusy (nothing written)."""
+        """One write transaction (inside ``held_writes``, a savepoint of the held one). Another
+        process holding the board past the busy timeout is StoreBusy (nothing written)."""
+        if getattr(self._local, "held", False):
+            with self._savepoint() as db:
+                yield db
+            return
         with _busy_as_store_busy(self.path):
             self._db.execute("BEGIN IMMEDIATE")
             try:
@@ -276,6 +280,32 @@ class SqliteStore(SqliteSeasons):
                     self._db.execute("ROLLBACK")
                 raise
             self._db.execute("COMMIT")
+
+    @contextmanager
+    def _savepoint(self) -> Iterator[sqlite3.Connection]:
+        db = self._db
+        db.execute("SAVEPOINT write")
+        try:
+            yield db
+        except BaseException:
+            db.execute("ROLLBACK TO write")
+            db.execute("RELEASE write")
+            raise
+        db.execute("RELEASE write")
+
+    @contextmanager
+    def held_writes(self) -> Iterator[None]:
+        """Every write this thread makes in the block in one transaction, each a savepoint of
+        it, with the page cache of an import's batch: committed when the block ends, rolled
+        back when it raises (then nothing was written). Other writers wait for its end, up to
+        the busy timeout."""
+        held = getattr(self._local, "held", False)
+        with self._bigger_cache(), self._write():
+            self._local.held = True
+            try:
+                yield
+            finally:
+                self._local.held = held
 
     # ---- boards ---------------------------------------------------------------------------
 
