@@ -38,6 +38,7 @@ from typing import NamedTuple
 from drboard_assembler import __version__ as ASSEMBLER_VERSION
 from drboard_assembler.design import load_design
 from drboard_assembler.record import (
+    Design,
     EvaluationRun,
     Lap,
     RaceType,
@@ -99,12 +100,16 @@ HYPERPARAMETERS = {
 
 
 class RecordFactory:
-    """Distinct, valid Records that differ in racer and laps.
+    """Distinct, valid Records that differ in racer, laps and design: each racer trained with
+    hyperparameters of their own (learning rate, batch size, epochs, discount, entropy), as the
+    racers of a real board do, so that nothing a board does once per distinct design is done
+    once for the whole board.
 
-    The design is parsed once; each record is one EvaluationRun.from_laps (validated) and the
-    record put together from validated parts, with its submission id computed from its content
-    (``content_hash``), without validating the whole record again: the first record made is
-    checked to validate as every record does (today's checks and its content hash included).
+    The design is parsed once and varied per record; each record is one EvaluationRun.from_laps
+    (validated) and the record put together from validated parts, with its submission id computed
+    from its content (``content_hash``), without validating the whole record again: the first
+    record made is checked to validate as every record does (today's checks and its content hash
+    included).
     Records carry no training summary, which keeps them (and the seeded database) small; pull
     and push never read it.
     """
@@ -128,13 +133,23 @@ class RecordFactory:
         return [Lap(trial=1, time_ms=rng.randint(1_000, 20_000),
                     completion_pct=rng.randint(1, 99), status="Off track")]
 
+    def own_design(self) -> Design:
+        """The design with a racer's own hyperparameters (valid values, chosen at random)."""
+        rng, base = self.rng, self.design
+        assert base.hyperparameters is not None
+        own = base.hyperparameters.model_copy(update={
+            "lr": round(10 ** rng.uniform(-5, -3), 8), "batch_size": rng.choice((32, 64, 128, 256, 512)),
+            "num_epochs": rng.randint(3, 10), "discount_factor": round(rng.uniform(0.9, 0.999), 4),
+            "beta_entropy": round(rng.uniform(0.001, 0.05), 4)})
+        return base.model_copy(update={"hyperparameters": own})
+
     def record(self, racer: str, laps: list[Lap] | None = None) -> Record:
         run = EvaluationRun.from_laps("metrics/EvaluationMetrics-20220709200242.json",
                                       laps if laps is not None else self.laps())
         draft = Record.model_construct(
             submission_id="0" * 64, track=TRACK, racer=racer, model_name=MODEL,
             race_type=RaceType.TIME_TRIAL, source_layout=SourceLayout.DRFC,
-            assembler_version=ASSEMBLER_VERSION, evaluations=[run], design=self.design,
+            assembler_version=ASSEMBLER_VERSION, evaluations=[run], design=self.own_design(),
             training=None, provenance=self.provenance)
         record = draft.model_copy(update={"submission_id": content_hash(draft)})
         if not self.checked:
