@@ -26,7 +26,6 @@ from pydantic import (
     ValidationInfo,
     model_validator,
 )
-from pydantic_core import PydanticSerializationError, to_json
 
 from . import limits
 from .aliases import alias_problem, text_problem, texts
@@ -465,83 +464,27 @@ _LATER_DESIGN_FIELDS = ("sources",)
 #: look for.
 _CANONICAL = json.JSONEncoder(sort_keys=True, separators=(",", ":"), ensure_ascii=False,
                               check_circular=False)
-#: Designs already encoded (canonical JSON by the design's JSON): many records share one (the
-#: console's defaults, a racer's models), and it is most of a record's content.
-_DESIGNS: dict[bytes, str] = {}
-_DESIGNS_KEPT = 1024
 
 
 def content_hash(record: Record) -> str:
     """The sha256 of the record's canonical content: its JSON with keys sorted, without its
     submission id and assembler version, and without the later fields it leaves empty."""
-    try:
-        design_json: bytes | None = model_json(record.design)
-    except PydanticSerializationError:  # text UTF-8 cannot hold: the hash fails as it would
-        design_json = None
-    return _hash_of(record.model_dump(mode="json", exclude=_DESIGN), record.design, design_json)
-
-
-def json_and_hash(record: Record, design_json: bytes | None = None) -> tuple[str, str]:
-    """The record's JSON as ``model_dump_json`` writes it, and its ``content_hash``: from one
-    dump of the record (what a board stores of a record, and checks it against).
-    ``design_json``, when given, is ``model_json(record.design)``, written already."""
-    dumped = record.model_dump(mode="json", exclude=_DESIGN)
-    if design_json is None:
-        design_json = model_json(record.design)
-    # An object's JSON is its members' in order, each "key":value, between braces and commas.
-    names = list(type(record).model_fields)
-    at = names.index("design")
-    before = to_json({name: dumped[name] for name in names[:at]})
-    after = to_json({name: dumped[name] for name in names[at + 1:]})
-    members = [before[1:-1], b'"design":' + design_json, after[1:-1]]
-    text = b"{" + b",".join(member for member in members if member) + b"}"
-    return text.decode(), _hash_of(dumped, record.design, design_json)
-
-
-_DESIGN = {"design"}
-
-
-def model_json(model: BaseModel) -> bytes:
-    """A part of a record (its design, ...) as its record's JSON writes it."""
-    return model.__pydantic_serializer__.to_json(model)
-
-
-def _hash_of(dumped: dict[str, Any], design: "Design", design_json: bytes | None) -> str:
-    """``content_hash`` of a record's ``model_dump(mode="json")`` without its design (which it
-    takes apart), its design and the design's JSON given."""
-    del dumped["submission_id"], dumped["assembler_version"]
-    for run in dumped["evaluations"]:
+    content = record.model_dump(mode="json", exclude=_NOT_CONTENT)
+    _drop_empty(content["design"], _LATER_DESIGN_FIELDS)
+    for run in content["evaluations"]:
         _drop_empty(run, _LATER_RUN_FIELDS)
         for lap in run["laps"]:
             _drop_empty(lap, _LATER_LAP_FIELDS)
-    canonical = _with_member(dumped, "design", _canonical_design(design, design_json))
-    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+    return hashlib.sha256(_CANONICAL.encode(content).encode("utf-8")).hexdigest()
 
 
-def _canonical_design(design: "Design", design_json: bytes | None) -> str:
-    """The canonical JSON of a record's design, by its JSON (which tells every value apart, its
-    type included, 1 from 1.0 and from true: one JSON, one canonical JSON)."""
-    canonical = _DESIGNS.get(design_json) if design_json is not None else None
-    if canonical is None:
-        content = design.model_dump(mode="json")
-        _drop_empty(content, _LATER_DESIGN_FIELDS)
-        canonical = _CANONICAL.encode(content)
-        if design_json is not None:
-            if len(_DESIGNS) >= _DESIGNS_KEPT:
-                _DESIGNS.clear()
-            _DESIGNS[design_json] = canonical
-    return canonical
+def json_and_hash(record: Record) -> tuple[str, str]:
+    """The record's JSON as ``model_dump_json`` writes it (what a board stores of a record),
+    and its ``content_hash`` (what the board checks it against)."""
+    return record.model_dump_json(), content_hash(record)
 
 
-def _with_member(content: dict[str, Any], name: str, canonical: str) -> str:
-    """The canonical JSON of ``content`` with one more member, ``name``, whose value's canonical
-    JSON is given: an object's canonical JSON is its members' in the order of their keys, each
-    "key":value, between braces and commas; those before ``name`` open ``content``'s own."""
-    whole = _CANONICAL.encode(content)
-    head = _CANONICAL.encode({key: value for key, value in content.items() if key < name})[:-1]
-    tail = whole[len(head):].removeprefix(",")  # the members after ``name``, and the brace
-    member = f"{_CANONICAL.encode(name)}:{canonical}"
-    return "".join((head, "," if len(head) > 1 else "", member, "," if tail != "}" else "", tail))
+_NOT_CONTENT = {"submission_id", "assembler_version"}
 
 
 def _drop_empty(fields: dict[str, Any], names: tuple[str, ...]) -> None:

@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, NamedTuple, TypeGuard
 
 from drboard_assembler.errors import field_path
-from drboard_assembler.record import Design, RaceType, Record, model_json
+from drboard_assembler.record import RaceType, Record
 from drboard_functions.errors import DomainError
 from drboard_functions.models.domain import BOARD_ID_PATTERN, Board, Submission, run_mismatches
 from drboard_functions.models.requests import ImportedSubmission
@@ -55,9 +55,9 @@ if TYPE_CHECKING:
     from drboard_functions.service import LeaderboardService
     from drboard_functions.service.loading import BulkImport, PreparedSubmission
 
-#: Prepares an exported submission (its record, its first time and, when known, the JSON of its
-#: design) for the board imported into (``loading.prepare_submission``).
-Prepare = Callable[[Record, datetime, "bytes | None"], "PreparedSubmission"]
+#: Prepares an exported submission (its record and its first time) for the board imported into
+#: (``loading.prepare_submission``).
+Prepare = Callable[[Record, datetime], "PreparedSubmission"]
 #: Archives a prepared submission's record, where the board archives (``BulkImport.keep``).
 Keep = Callable[[Record], None]
 
@@ -80,7 +80,6 @@ STDIN = "-"
 WRITE_BUFFER_BYTES = 1 << 20
 
 _LINE = TypeAdapter[ExportLine](ExportLine)
-_DESIGN = TypeAdapter[Design](Design)
 
 
 class BadExportFile(Exception):
@@ -455,92 +454,26 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tu
     entries = 0
     for number, raw in chunk:
         where = f"{name}:{number}"
-        submission = _SHARED_DESIGNS.prepared(where, raw, exported, prepare)
-        if submission is None:
-            line = _parsed(where, raw, IMPORT_CHECKS)
-            if isinstance(line, ExportedBoard):
-                raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
-            if isinstance(line, ExportedEntry):
-                entries += 1
-                continue
-            submission = line.record, _prepared_line(where, line.submission, line.record,
-                                                     exported, prepare)
+        line = _parsed(where, raw, IMPORT_CHECKS)
+        if isinstance(line, ExportedBoard):
+            raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
+        if isinstance(line, ExportedEntry):
+            entries += 1
+            continue
+        prepared.append(_prepared_line(where, line.submission, line.record, exported, prepare))
         if keep is not None:
-            keep(submission[0])
-        prepared.append(submission[1])
+            keep(line.record)
     return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
 
 
 def _prepared_line(where: str, submission: Submission, record: Record, exported: Board,
-                   prepare: Prepare, design_json: bytes | None = None) -> PreparedSubmission:
+                   prepare: Prepare) -> PreparedSubmission:
     """Check a submission line for the exported board, and prepare it (BadExportFile)."""
     _check_submission(where, submission, record, exported)
     try:
-        return prepare(record, submission.submitted_at, design_json)
+        return prepare(record, submission.submitted_at)
     except DomainError as error:
         raise BadExportFile(f"{where}: {_refusal(error)}") from None
-
-
-class _SharedDesigns:
-    """The designs of an export's records, each read from its JSON once: records often share one
-    (a racer's models, the console's defaults), and a design is half of reading a record and
-    most of writing it. A submission line as drboard writes it is read without its record's
-    design, which is read (or found) on its own; the record so put together is taken only if
-    it writes back exactly the line's record, which reading the line whole then gives too.
-    Any other line, and a line with any problem, is read whole (which names the problem)."""
-
-    KEPT = 256
-
-    def __init__(self) -> None:
-        self.designs: dict[bytes, tuple[Design, bytes]] = {}
-
-    def prepared(self, where: str, raw: bytes, exported: Board,
-                 prepare: Prepare) -> tuple[Record, PreparedSubmission] | None:
-        """The line's record and its prepared submission, or None: read the line whole."""
-        parts = _record_parts(raw)
-        if parts is None:
-            return None
-        start, design_from, design_to = parts
-        try:
-            line = _LINE.validate_json(raw[:design_from] + b"{}" + raw[design_to:],
-                                       context=IMPORT_CHECKS)
-            design, design_json = self._design(raw[design_from:design_to])
-        except ValidationError:
-            return None
-        if not isinstance(line, ExportedSubmission):
-            return None
-        record = line.record.model_copy(update={"design": design})
-        try:
-            prepared = _prepared_line(where, line.submission, record, exported, prepare, design_json)
-        except BadExportFile:
-            return None
-        if prepared.row.record.encode() != raw.rstrip()[start:-1]:
-            return None
-        return record, prepared
-
-    def _design(self, raw: bytes) -> tuple[Design, bytes]:
-        found = self.designs.get(raw)
-        if found is None:
-            design = _DESIGN.validate_json(raw, context=IMPORT_CHECKS)
-            found = design, model_json(design)
-            if len(self.designs) >= self.KEPT:
-                self.designs.clear()
-            self.designs[raw] = found
-        return found
-
-
-def _record_parts(raw: bytes) -> tuple[int, int, int] | None:
-    """Where a submission line as drboard writes it (``Transfer.export_lines``) has its record
-    (from), and its record's design (from, to); None for a line of another form."""
-    start = raw.find(b'"record":')
-    design = raw.find(b',"design":', start) if start >= 0 else -1
-    training = raw.rfind(b',"training":', design) if design >= 0 else -1
-    if training < 0:
-        return None
-    return start + len(b'"record":'), design + len(b',"design":'), training
-
-
-_SHARED_DESIGNS = _SharedDesigns()
 
 
 def _refusal(error: DomainError) -> str:

@@ -1,7 +1,6 @@
-"""An export's submission lines are read with their records' designs shared (each design read
-once): what that prepares is, line for line, what reading every line whole prepares, for lines
-as drboard writes them and for lines of any other form (spaces, another key order, a number
-written another way); and a bad line is named as reading it whole names it."""
+"""An export's submission lines in any form a JSON reader takes alike (spaces, a number written
+another way, a key twice, a default left out) prepare what the lines drboard writes prepare;
+and a bad line is named by its file, its line and its field."""
 
 from __future__ import annotations
 
@@ -52,27 +51,19 @@ def reworded(line: bytes) -> list[bytes]:
     ]
 
 
-def prepared(lines: list[bytes], shared: bool, monkeypatch: pytest.MonkeyPatch) -> list[PreparedSubmission]:
-    with monkeypatch.context() as patch:
-        if not shared:
-            patch.setattr(transfer._SHARED_DESIGNS, "prepared", lambda *_: None)
-        check = functools.partial(prepare_submission, BOARD)
-        return transfer._prepared_chunk("export.jsonl", BOARD, check, list(enumerate(lines, 2))).prepared
+def prepared(lines: list[bytes]) -> list[PreparedSubmission]:
+    check = functools.partial(prepare_submission, BOARD)
+    return transfer._prepared_chunk("export.jsonl", BOARD, check, list(enumerate(lines, 2))).prepared
 
 
-def test_lines_read_with_shared_designs_prepare_what_lines_read_whole_prepare(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+def test_lines_in_other_forms_prepare_what_drboard_s_own_lines_prepare() -> None:
     lines = [line_of(record) for record in records()]
-    others = [other for line in lines[-2:] for other in reworded(line)]
-    whole = prepared(lines + others, shared=False, monkeypatch=monkeypatch)
-    read = transfer._SHARED_DESIGNS.prepared
-    taken: list[bool] = []
-    monkeypatch.setattr(transfer._SHARED_DESIGNS, "prepared",
-                        lambda *args: taken.append(read(*args) is not None) or read(*args))
-    assert prepared(lines + others, shared=True, monkeypatch=monkeypatch) == whole
-    assert taken == [True] * len(lines) + [False] * len(others)
-    assert prepared(lines, shared=True, monkeypatch=monkeypatch) == whole[:len(lines)], (
-        "designs met before")
+    own = prepared(lines)
+    assert [p.row.submission_id for p in own] == [record.submission_id for record in records()]
+    for line, expected in zip(lines[-2:], own[-2:], strict=True):
+        others = reworded(line)
+        assert all(other != line for other in others)
+        assert prepared(others) == [expected] * len(others)
 
 
 @pytest.mark.parametrize(("good", "bad", "says"), [
@@ -80,11 +71,9 @@ def test_lines_read_with_shared_designs_prepare_what_lines_read_whole_prepare(
     (b'"design":{', b'"design":{"colour":"red",', r"record\.design\.colour: "),
     (b'"model_name":"', b'"model_name":"tampered-', r"record\.submission_id: does not match"),
 ], ids=["a design out of bounds", "a design with a field too many", "tampered"])
-def test_a_bad_line_is_named_as_reading_it_whole_names_it(
-        monkeypatch: pytest.MonkeyPatch, good: bytes, bad: bytes, says: str) -> None:
+def test_a_bad_line_is_named_by_its_file_line_and_field(good: bytes, bad: bytes, says: str) -> None:
     good_line = line_of(make_record("A", [(9000, 100)]))
     head, record = good_line.split(b'"record":', 1)
     lines = [good_line, head + b'"record":' + record.replace(good, bad, 1)]
-    for shared in (True, False):
-        with pytest.raises(transfer.BadExportFile, match=rf"^export\.jsonl:3: {says}"):
-            prepared(lines, shared=shared, monkeypatch=monkeypatch)
+    with pytest.raises(transfer.BadExportFile, match=rf"^export\.jsonl:3: {says}"):
+        prepared(lines)

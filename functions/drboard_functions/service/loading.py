@@ -72,14 +72,12 @@ class ImportTally(NamedTuple):
     duplicates: int
 
 
-def prepare_submission(board: Board, record: Record, submitted_at: datetime,
-                       design_json: bytes | None = None) -> PreparedSubmission:
+def prepare_submission(board: Board, record: Record, submitted_at: datetime) -> PreparedSubmission:
     """Check an exported submission (its record, first submitted at ``submitted_at``) for
     ``board`` (BoardMismatch, SubmissionTooLarge, InvalidSubmission when its id is not its
-    content's hash) and prepare what importing it writes: reads and writes nothing.
-    ``design_json``, when given, is the record's design as the record's JSON writes it."""
+    content's hash) and prepare what importing it writes: reads and writes nothing."""
     check_belongs(record, board)
-    stored, digest = json_and_hash(record, design_json)
+    stored, digest = json_and_hash(record)
     check_record_json_size(stored)
     if digest != record.submission_id:
         raise InvalidSubmission("the record's submission_id does not match its content",
