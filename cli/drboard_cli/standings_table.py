@@ -4,15 +4,17 @@
 Apart because it imports no model: it reads a board page's fields by name, so it renders the
 view models the service returns and, as well, a page's JSON read back with :class:`Fields` (the
 standings kept beside the embedded board, :mod:`drboard_functions.stores.sqlite_standings`),
-with the same code and so the same bytes. That JSON keeps times and conditions as text: a
-terminal of :data:`WIDE` columns or more, which shows when each entry was submitted, and a board
-stating conditions, are rendered from the view models.
+with the same code and so the same bytes (that JSON keeps each entry's submission time as
+text, and its conditions as a mapping: :func:`submitted` and :mod:`drboard_functions.conditions`
+read both forms).
 """
 
 from __future__ import annotations
 
+from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
+from drboard_functions import conditions
 from drboard_functions.display import design_summary, gap, method_label, percent, seconds
 from rich.table import Table
 from rich.text import Text
@@ -48,6 +50,12 @@ def time_label(entry: EntryView) -> str:
     return f"{label} {FLAG_MARK}" if entry.flags else label
 
 
+def submitted(entry: EntryView) -> datetime:
+    """When the entry's run was submitted (the view's time, or the JSON's text of it)."""
+    moment: datetime | str = entry.submitted_at
+    return datetime.fromisoformat(moment) if isinstance(moment, str) else moment
+
+
 def print_standings(console: Console, page: BoardPage) -> None:
     """The standings as wide as the console, or the line that says the board has none."""
     if page.entries:
@@ -62,8 +70,6 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     wide = width >= WIDE
     caption = f"{board.participants} racers · {method_label(board)}"
     if board.conditions is not None:
-        from drboard_functions import conditions
-
         caption += f" · evaluated with {conditions.summary(board.conditions)}"
     caption += " · times include penalties"
     if any(entry.flags for entry in page.entries):
@@ -91,10 +97,8 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
         cells += [time_label(entry), gap(entry.gap_ms), str(entry.laps_completed),
                   design_summary(entry.design)]
         if each_conditions:
-            from drboard_functions import conditions
-
             cells.append(conditions.short(entry.conditions))
         if wide:
-            cells.append(entry.submitted_at.strftime("%b %d %H:%M"))
+            cells.append(submitted(entry).strftime("%b %d %H:%M"))
         plain_row(table, *cells, style=None if entry.qualified else "dim")
     return table

@@ -1,12 +1,18 @@
-"""The evaluation conditions a board requires, against the ones a run's evaluation ran under."""
+"""The evaluation conditions a board requires, against the ones a run's evaluation ran under.
+
+It imports no model: `drboard pull` words the conditions of the standings kept beside the
+embedded board, which are JSON read back (:func:`stated_values`), without loading the models.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
-from drboard_assembler.record import Conditions, EvaluationRun
+if TYPE_CHECKING:
+    from drboard_assembler.record import Conditions, EvaluationRun
 
-from .models.domain import BoardConditions
+    from .models.domain import BoardConditions
 
 #: How each condition reads, in the order they are listed.
 LABELS = {
@@ -58,11 +64,21 @@ def meets(required: BoardConditions | None, run: EvaluationRun) -> bool:
     return not unmet(required, run.conditions)
 
 
-def summary(conditions: Conditions | BoardConditions | None) -> str:
+def stated_values(conditions: Conditions | BoardConditions | Mapping[str, Any]) -> dict[str, Any]:
+    """The conditions stated, by name: of a run's or a board's conditions, or of their JSON read
+    back as a mapping (where every condition is written, those not stated as null)."""
+    if isinstance(conditions, Mapping):
+        return {name: value for name, value in conditions.items()
+                if name in LABELS and value is not None}
+    return {name: value for name, value in conditions.model_dump(exclude_none=True).items()
+            if name in LABELS}
+
+
+def summary(conditions: Conditions | BoardConditions | Mapping[str, Any] | None) -> str:
     """The conditions stated, on one line (``off-track penalty 5 s · trials 3``); "" for none."""
     if conditions is None:
         return ""
-    values = conditions.model_dump(exclude_none=True)
+    values = stated_values(conditions)
     return " · ".join(condition_text(name, values[name]) for name in LABELS if name in values)
 
 
@@ -71,12 +87,12 @@ _SHORT = {"off_track_penalty_s": "off-track {} s", "collision_penalty_s": "colli
           "bots": "{} bots"}
 
 
-def short(conditions: Conditions | None) -> str:
+def short(conditions: Conditions | Mapping[str, Any] | None) -> str:
     """The conditions stated, for a table's cell: ``off-track 5 s, 3 trials, continuous``;
     ``unknown`` when the evaluation's parameters state none."""
     if conditions is None:
         return "unknown"
-    values = conditions.stated()
+    values = stated_values(conditions)
     parts = []
     for name in LABELS:
         if name not in values:

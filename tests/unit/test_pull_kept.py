@@ -62,7 +62,7 @@ def service_pulls(monkeypatch: pytest.MonkeyPatch) -> list[Path]:
 
 @pytest.mark.parametrize("args", [PULL, ("pull", "--board", "reInvent2019_track", "--top", "3")],
                          ids=" ".join)
-@pytest.mark.parametrize("width", [60, 100])
+@pytest.mark.parametrize("width", [60, 100, 160])
 def test_a_repeated_pull_prints_what_the_service_printed_without_it(
         board: Path, service_pulls: list[Path], args: tuple[str, ...], width: int) -> None:
     through_service = invoke(board, *args, width=width)
@@ -72,6 +72,24 @@ def test_a_repeated_pull_prints_what_the_service_printed_without_it(
     assert kept == through_service
     assert "Indy" in kept and "SAC" in kept
     assert ("52 % done" in kept) == ("--top" not in args)
+    # a wide terminal shows each entry's model, conditions and submission time
+    assert ("Submitted" in kept and "collision 5 s" in kept) == (width >= 110)
+
+
+def test_a_board_requiring_conditions_reads_the_same_from_its_kept_standings(
+        tmp_path: Path, service_pulls: list[Path]) -> None:
+    db = tmp_path / "board.db"
+    invoke(db, "board", "create", "pinned", "--track", "reInvent2019", "--title", "Pinned",
+           "--require", "off-track-penalty=3", "--require", "trials=3")
+    pinned = [str(p) for p in EXAMPLES if p.name.startswith(("comet", "drifter"))]  # 3 s, 3 trials
+    invoke(db, "push", "--board", "pinned", *pinned)
+    forget_kept(db)
+    for width in (80, 160):
+        through_service = invoke(db, "pull", "--board", "pinned", width=width)
+        opened = len(service_pulls)
+        assert invoke(db, "pull", "--board", "pinned", width=width) == through_service
+        assert len(service_pulls) == opened, "the second pull opened the service"
+        assert "evaluated with off-track penalty 3 s · trials 3" in " ".join(through_service.split())
 
 
 @pytest.mark.parametrize("batch", [False, True], ids=["one run", "a batch"])
@@ -100,14 +118,12 @@ def test_a_board_that_changed_another_way_is_read_again(board: Path, service_pul
     assert "Indy" not in removed
 
 
-def test_what_the_terminal_or_the_options_need_beyond_the_table_goes_through_the_service(
+def test_another_format_or_a_file_goes_through_the_service(
         board: Path, service_pulls: list[Path], tmp_path: Path) -> None:
     invoke(board, *PULL)
-    wide = invoke(board, *PULL, width=120)  # the model, conditions and submission times
     as_json = json.loads(invoke(board, *PULL, "--format", "json"))
     invoke(board, *PULL, "-o", str(tmp_path / "standings.txt"))
-    assert len(service_pulls) == 4
-    assert "Submitted" in wide
+    assert len(service_pulls) == 3
     assert as_json["entries"][0]["racer"] == "Indy"
 
 

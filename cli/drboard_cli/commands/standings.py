@@ -74,25 +74,22 @@ def pull(ctx: Context, track: str | None, board: str | None, top: int, fmt: str,
 
 def _print_kept(ctx: Context, board_id: str, top: int) -> bool:
     """Print the standings kept beside the embedded board for the board as it is now, if any
-    are and the terminal's table needs nothing they keep as text; whether it did. This is
-    how a repeated pull answers without loading the service and its models."""
+    are; whether it did. This is how a repeated pull answers without loading the service and
+    its models."""
     import json
     import time
 
     from drboard_functions.stores.sqlite_standings import kept_page
 
-    from ..standings_table import WIDE, Fields, print_standings
+    from ..standings_table import Fields, print_standings
 
     db = ctx.embedded_file
-    if db is None or out().width >= WIDE:
+    if db is None:
         return False
     kept = kept_page(db, board_id, top, time.time())
     if kept is None:
         return False
-    page = json.loads(kept, object_hook=Fields)
-    if page.board.conditions is not None:
-        return False
-    print_standings(out(), page)
+    print_standings(out(), json.loads(kept, object_hook=Fields))
     return True
 
 
