@@ -26,6 +26,7 @@ from drboard_functions.stores.sqlite import SqliteStore
 from moto import mock_aws
 
 from tests.awskit import REGION
+from tests.importkit import imported
 from tests.recordkit import make_record
 from tests.tablekit import create_board_table
 
@@ -74,15 +75,6 @@ def board_with_a_racer(path: Path) -> dict[str, list[tuple[Any, ...]]]:
     LeaderboardService(store).push(make_record("Resident", [(9999, 100)]))
     store.close()
     return rows(path)
-
-
-def imported(export: Path, target: Path) -> transfer.ImportSummary:
-    store = SqliteStore(target)
-    try:
-        with export.open("rb") as handle:
-            return transfer.load_export(LeaderboardService(store), str(export), handle, None)
-    finally:
-        store.close()
 
 
 def spoiled(export: Path, number: int) -> None:

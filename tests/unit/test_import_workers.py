@@ -17,6 +17,7 @@ from drboard_functions.models.requests import ImportedSubmission
 from drboard_functions.service import LeaderboardService
 from drboard_functions.stores.sqlite import SqliteStore
 
+from tests.importkit import imported
 from tests.recordkit import copy_of, make_record
 
 TRACK_BOARD = "reInvent2019_track"
@@ -41,15 +42,6 @@ def exported(tmp_path: Path) -> Path:
             out.write(line)
     store.close()
     return path
-
-
-def imported(export: Path, target: Path) -> transfer.ImportSummary:
-    store = SqliteStore(target)
-    try:
-        with export.open("rb") as handle:
-            return transfer.load_export(LeaderboardService(store), str(export), handle, None)
-    finally:
-        store.close()
 
 
 def rows(path: Path) -> dict[str, list[tuple[Any, ...]]]:
