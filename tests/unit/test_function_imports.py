@@ -129,6 +129,20 @@ def test_the_pull_function_answers_the_standings_without_the_record_schema(board
     assert found["record_schema_built"] is False
 
 
+def answered_by(handler: str) -> str:
+    """The end of a probe: the handler answers the event in ``argv[1]`` with a Lambda context,
+    and the answer and the modules loaded are printed as JSON."""
+    return f"""
+class Context:
+    function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
+    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
+    aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
+with open(sys.argv[1]) as file:
+    answer = {handler}.lambda_handler(json.load(file), Context())
+print(json.dumps({{"answer": answer, "loaded": sorted(sys.modules)}}))
+"""
+
+
 #: Run in a fresh process: the pull function answering a page its table keeps (a shelf in
 #: memory here, as DynamoDB's answers it), and what that loaded.
 KEPT_PROBE = """
@@ -146,14 +160,7 @@ class Shelf:
         return 3, page if key == "json#25" else None
 shelf = Shelf()
 wiring.kept_pages_from_environment = lambda: KeptPages(shelf.version, shelf, lambda: datetime.now(UTC))
-class Context:
-    function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
-    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
-    aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
-with open(sys.argv[1]) as file:
-    answer = pull.lambda_handler(json.load(file), Context())
-print(json.dumps({"answer": answer, "loaded": sorted(sys.modules)}))
-"""
+""" + answered_by("pull")
 
 
 def test_the_pull_function_answers_a_kept_page_before_loading_the_resolver_or_pydantic() -> None:
@@ -190,14 +197,7 @@ def draw(svg):
     from drboard_functions.cards.png import render
     return render(svg)
 wiring.kept_cards_from_environment = lambda: KeptCards(pages, draw)
-class Context:
-    function_name = "drboard-test"; function_version = "$LATEST"; memory_limit_in_mb = 512
-    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:drboard-test"
-    aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
-with open(sys.argv[1]) as file:
-    answer = card.lambda_handler(json.load(file), Context())
-print(json.dumps({"answer": answer, "loaded": sorted(sys.modules)}))
-"""
+""" + answered_by("card")
 
 
 def test_the_card_function_draws_a_kept_card_before_loading_the_resolver_or_pydantic(
