@@ -7,10 +7,10 @@ and ``/view?screen=1`` (the big screen) — is rendered once per board version a
 SQLite row, or one consistent DynamoDB read of the board item) and, while the version is the one
 the copy was rendered from, answers the copy's bytes as they are, or ``304 Not Modified`` when
 the client's ``If-None-Match`` names its ETag: no entry is read, nothing is parsed, validated or
-encoded again. The resolver (:class:`.app.BoardResolver`) answers such reads before Powertools
-routes them, ``drboard serve`` before it even builds an API Gateway event, and the pull function
-before it loads the resolver at all; a read no copy answers (another page, a cursor, a board
-that changed) goes through the routes, which render the page and keep it (:meth:`Standings.copy`).
+encoded again. ``drboard serve`` answers such reads before it builds an API Gateway event, and
+the pull function before it loads the resolver at all; a read no copy answers (another page, a
+cursor, a board that changed) goes through the routes, which render the page and keep it
+(:meth:`Standings.copy`).
 
 Where the copies live: in each process (``drboard serve``, each warm Lambda container), keyed by
 the board and the page asked for; and where the store keeps pages (DynamoDB: see
