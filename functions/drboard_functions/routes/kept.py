@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from http import HTTPStatus
-from typing import TYPE_CHECKING, Any, Literal, NamedTuple
+from typing import TYPE_CHECKING, Any, Generic, Literal, NamedTuple, TypeVar
 from urllib.parse import parse_qsl, unquote
 
 from ..cursors import MAX_PAGE
@@ -48,6 +48,8 @@ Kind = Literal["json", "view", "screen"]
 CardKind = Literal["svg", "png"]
 _CARD_FILES: dict[str, CardKind] = {"card.svg": "svg", "card.png": "png"}
 Clock = Callable[[], datetime]
+K = TypeVar("K")
+V = TypeVar("V")
 
 
 class Wanted(NamedTuple):
@@ -200,6 +202,29 @@ def shelf_key(page: Wanted, address: str) -> str:
     return name
 
 
+class Recent(Generic[K, V]):
+    """The ``size`` values last read or put, by key (thread-safe): the oldest go first."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self._values: OrderedDict[K, V] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key: K) -> V | None:
+        with self._lock:
+            value = self._values.get(key)
+            if value is not None:
+                self._values.move_to_end(key)
+            return value
+
+    def put(self, key: K, value: V) -> None:
+        with self._lock:
+            self._values[key] = value
+            self._values.move_to_end(key)
+            while len(self._values) > self.size:
+                self._values.popitem(last=False)
+
+
 class KeptPages:
     """The pages one process keeps (thread-safe, the most recently read ``size`` of them), each
     checked against the board's version at every read; and, when the store keeps pages too (its
@@ -213,18 +238,13 @@ class KeptPages:
         self.version = version
         self.shelf = shelf
         self.clock = clock
-        self.size = size
-        self._copies: OrderedDict[tuple[Wanted, str], Copy] = OrderedDict()
-        self._lock = threading.Lock()
+        self._copies: Recent[tuple[Wanted, str], Copy] = Recent(size)
 
     def kept(self, page: Wanted, address: str = "") -> Copy | None:
         """The copy of the page for the board's version now, if one is kept: one read of the
         version (and of the shelf's page, when this process holds none for that version)."""
         name = copy_key(page, address)
-        with self._lock:
-            copy = self._copies.get(name)
-            if copy is not None:
-                self._copies.move_to_end(name)
+        copy = self._copies.get(name)
         if copy is not None and copy.holds(self.version(page.board_id), self.clock()):
             return copy
         if self.shelf is None:
@@ -238,30 +258,21 @@ class KeptPages:
                          stored.not_modified_headers)
         if not copy.holds(version, self.clock()):
             return None
-        self._remember(name, copy)
+        self._copies.put(name, copy)
         return copy
 
     def held(self, page: Wanted, address: str = "") -> Copy | None:
         """The copy of the page this process holds, whatever its version (nothing is read)."""
-        with self._lock:
-            return self._copies.get(copy_key(page, address))
+        return self._copies.get(copy_key(page, address))
 
     def keep(self, page: Wanted, address: str, copy: Copy) -> None:
         """Keep a page just rendered, here and on the store's shelf."""
-        self._remember(copy_key(page, address), copy)
+        self._copies.put(copy_key(page, address), copy)
         if self.shelf is not None:
             fresh_until = copy.fresh_until.timestamp() if copy.fresh_until is not None else None
             self.shelf.keep(page.board_id, shelf_key(page, address), StoredPage(
                 copy.version, fresh_until, copy.etag, copy.headers, copy.not_modified_headers,
                 copy.text))
-
-    def _remember(self, name: tuple[Wanted, str], copy: Copy) -> None:
-        with self._lock:
-            self._copies[name] = copy
-            self._copies.move_to_end(name)
-            while len(self._copies) > self.size:
-                self._copies.popitem(last=False)
-
 
 class WantedCard(NamedTuple):
     """A racer's result card, as a request asks for it."""
@@ -295,9 +306,7 @@ class KeptCards:
     def __init__(self, pages: KeptPages, draw: Callable[[str], bytes], size: int = KEPT_PAGES) -> None:
         self.pages = pages
         self.draw = draw
-        self.size = size
-        self._cards: OrderedDict[tuple[str, str, CardKind], tuple[str, Copy]] = OrderedDict()
-        self._lock = threading.Lock()
+        self._cards: Recent[tuple[str, str, CardKind], tuple[str, Copy]] = Recent(size)
 
     def kept(self, card: WantedCard) -> Copy | None:
         page = self.pages.kept(Wanted(card.board_id, "json", DEFAULT_LIMIT))
@@ -306,8 +315,7 @@ class KeptCards:
         from drboard_assembler.aliases import alias_key
 
         name = (card.board_id, alias_key(card.racer), card.kind)
-        with self._lock:
-            held = self._cards.get(name)
+        held = self._cards.get(name)
         if held is not None and held[0] == page.etag:
             return held[1]
         from .. import cards
@@ -316,11 +324,7 @@ class KeptCards:
         if content is None:
             return None
         copy = card_copy(page, cards.racer_svg(content), card.kind, self.draw)
-        with self._lock:
-            self._cards[name] = (page.etag, copy)
-            self._cards.move_to_end(name)
-            while len(self._cards) > self.size:
-                self._cards.popitem(last=False)
+        self._cards.put(name, (page.etag, copy))
         return copy
 
 
@@ -328,11 +332,7 @@ def event_answer(event: Mapping[str, Any], pages: KeptPages) -> dict[str, Any] |
     """The answer to an API Gateway (HTTP API) event from a kept page, if it asks for one that
     is kept for the board as it is now; None: the routes answer it. A store that cannot be read
     just now is the routes' to answer too (they say so, 503)."""
-    if event.get("body"):
-        return None
-    http = (event.get("requestContext") or {}).get("http") or {}
-    page = wanted(str(http.get("method", "")), str(event.get("rawPath") or ""),
-                  str(event.get("rawQueryString") or ""))
+    page = wanted(*_request_line(event))
     if page is None:
         return None
     headers: Mapping[str, str] = event.get("headers") or {}
@@ -347,11 +347,7 @@ def event_answer(event: Mapping[str, Any], pages: KeptPages) -> dict[str, Any] |
 def card_event_answer(event: Mapping[str, Any], cards: KeptCards) -> dict[str, Any] | None:
     """The answer to an API Gateway (HTTP API) event from a card drawn from a kept page, if it
     asks for one (see :class:`KeptCards`); None: the routes answer it."""
-    if event.get("body"):
-        return None
-    http = (event.get("requestContext") or {}).get("http") or {}
-    card = wanted_card(str(http.get("method", "")), str(event.get("rawPath") or ""),
-                       str(event.get("rawQueryString") or ""))
+    card = wanted_card(*_request_line(event))
     if card is None:
         return None
     try:
@@ -359,6 +355,16 @@ def card_event_answer(event: Mapping[str, Any], cards: KeptCards) -> dict[str, A
     except StoreError:
         return None
     return _answered(copy, event.get("headers") or {})
+
+
+def _request_line(event: Mapping[str, Any]) -> tuple[str, str, str]:
+    """An event's method, path and query string; a request with a body asks for no kept copy
+    (its method is given as "", which none takes)."""
+    if event.get("body"):
+        return "", "", ""
+    http = (event.get("requestContext") or {}).get("http") or {}
+    return (str(http.get("method", "")), str(event.get("rawPath") or ""),
+            str(event.get("rawQueryString") or ""))
 
 
 def _answered(copy: Copy | None, headers: Mapping[str, str]) -> dict[str, Any] | None:
