@@ -110,6 +110,14 @@ class Context:
         return self._board
 
     @property
+    def place(self) -> str:
+        """Which board a push went to, in the words a racer checks after it: an event's board
+        by its address, or the board on this computer by its file."""
+        if self.endpoint:
+            return f"the board at {self.endpoint}"
+        return f"the board on this computer ({self.db})"
+
+    @property
     def embedded_file(self) -> Path | None:
         """The embedded board's file when the commands talk to it as drboard opens it (no
         endpoint, no opener given by a test): what is kept beside the board may then be read

@@ -20,6 +20,7 @@ from drboard_functions.stores.sqlite import SqliteStore
 from tests.recordkit import copy_of, make_record
 
 LAN = "192.168.1.20"
+EXAMPLE = sorted(p for p in (Path(__file__).parents[2] / "examples").iterdir() if p.is_dir())[0]
 
 
 class Clock:
@@ -261,6 +262,9 @@ def test_drboard_join_saves_a_token_only_its_owner_can_read(server: BoardServer)
         from drboard_cli import config
 
         assert config.load_settings()["endpoint"] == url, "the joined board is the racer's board"
+        pushed = CliRunner().invoke(cli, ["push", str(EXAMPLE)])  # the next thing a racer types
+        assert pushed.exit_code == 0, pushed.output
+        assert f"Pushed to the board at {url}." in pushed.stderr
         again = CliRunner().invoke(cli, ["--endpoint", url, "join", code])  # the global form
         assert again.exit_code == 0 and "Renewed" in again.output
         assert tokens.load(url).username == saved.username  # type: ignore[union-attr]

@@ -88,6 +88,15 @@ def test_clockwise_runs_rank_on_their_own_board(runner: CliRunner) -> None:
         assert boards["reInvent2019_track_cw"]["direction"] == "cw"
 
 
+def test_a_push_names_the_board_it_went_to(runner: CliRunner, tmp_path: Path) -> None:
+    """A racer who has not joined an event (or mistyped the join) sees that the push stayed on
+    this computer, and what to type to race at the event."""
+    code, out, err = run(runner, "--db", tmp_path / "mine.db", "push", EXAMPLES[0])
+    assert code == 0 and "rank 1 of 1" in out
+    assert f"Pushed to the board on this computer ({tmp_path / 'mine.db'})." in err
+    assert "`drboard join`" in err
+
+
 def test_pushing_the_same_run_twice_changes_nothing(runner: CliRunner) -> None:
     run(runner, "push", EXAMPLES[0])
     code, out, _ = run(runner, "push", EXAMPLES[0])
