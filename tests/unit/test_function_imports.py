@@ -129,6 +129,30 @@ def test_the_pull_function_answers_the_standings_without_the_record_schema(board
     assert found["record_schema_built"] is False
 
 
+def test_the_admin_function_loads_only_the_routes_of_the_request(tmp_path: Path) -> None:
+    """A cold admin function creating a board loads the organisers' routes, not the seasons' nor
+    the webhooks'; the seasons' load when a season request comes (and the boards' still answer)."""
+    found = probe("admin", tmp_path / "board.db", "admin_create_board.json")
+    assert found["answered"] == {"admin_create_board.json": 201}
+    assert among(found["loaded"], ("drboard_functions.routes.season_changes",
+                                   "drboard_functions.routes.webhooks")) == []
+    found = probe("admin", tmp_path / "board.db", "admin_create_season.json", "admin_update_board.json")
+    assert found["answered"] == {"admin_create_season.json": 201, "admin_update_board.json": 200}
+    assert "drboard_functions.routes.season_changes" in found["loaded"]
+
+
+def test_each_admin_route_is_found_in_the_module_that_declares_it() -> None:
+    from drboard_functions.routes import admin_router, admin_routes_module, build_app
+
+    app = build_app(admin_router)
+    routes = app._static_routes + app._dynamic_routes
+    assert len(routes) > 30
+    for route in routes:
+        path = route.path.replace("<", "").replace(">", "")  # /boards/<board> -> /boards/board
+        declared_in = route.func.__module__.rpartition(".")[2]
+        assert admin_routes_module(path) == declared_in, route.path
+
+
 def answered_by(handler: str) -> str:
     """The end of a probe: the handler answers the event in ``argv[1]`` with a Lambda context,
     and the answer and the modules loaded are printed as JSON."""

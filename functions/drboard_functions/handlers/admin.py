@@ -6,6 +6,7 @@ and DELETE /boards/{board}/bans/{racer}."""
 
 from __future__ import annotations
 
+from importlib import import_module
 from typing import Any
 
 from aws_lambda_powertools import Logger, Metrics
@@ -16,8 +17,7 @@ from aws_lambda_powertools.utilities.typing import LambdaContext
 
 from ..errors import BoardNotFound
 from ..identity import caller_from_event
-from ..routes import admin_router, build_app, canonical_event
-from ..routes.standings import renew_after_change
+from ..routes import BoardResolver, admin_routes_module, build_app, canonical_event
 from . import wiring
 
 logger = Logger()
@@ -53,18 +53,43 @@ def keep_standings(app: APIGatewayHttpResolver, next_middleware: NextMiddleware)
     route = app.context.get("_route")
     if (app.current_event.http_method != "GET" and response.status_code < 300 and board
             and getattr(route, "path", None) not in ONE_OF_MANY):
+        from ..routes.standings import renew_after_change
+
         error = renew_after_change(app.context["service"], board)
         if error is not None and not isinstance(error, BoardNotFound):  # a deleted board shows none
             logger.warning("StandingsNotKept", extra={"board": board, "error": error.message})
     return response
 
 
-app = build_app(admin_router)
-app.use(middlewares=[audit, keep_standings])
+class AdminRoutes:
+    """The resolver of the routes loaded so far. Each request loads the module of the routes that
+    answer its path (``routes.admin_routes_module``) the first time one needs it, and the resolver
+    is built again with them: a cold start loads one module's routes and models, not all of
+    them."""
+
+    def __init__(self) -> None:
+        self.loaded: set[str] = set()
+        self.app: BoardResolver | None = None
+
+    def for_path(self, path: str) -> BoardResolver:
+        module = admin_routes_module(path)
+        if self.app is None or module not in self.loaded:
+            import_module(f"..routes.{module}", __package__)
+            self.loaded.add(module)
+            from ..routes.params import admin_router
+
+            self.app = build_app(admin_router)
+            self.app.use(middlewares=[audit, keep_standings])
+        return self.app
+
+
+routes = AdminRoutes()
 
 
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
 @metrics.log_metrics(capture_cold_start_metric=True)
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
+    event = canonical_event(event)
+    app = routes.for_path(str(event.get("rawPath") or ""))
     app.append_context(service=wiring.service_from_environment())
-    return app.resolve(canonical_event(event), context)
+    return app.resolve(event, context)

@@ -107,6 +107,18 @@ def __getattr__(name: str) -> Any:
     return getattr(import_module(f"{__name__}.{home}"), name)
 
 
+def admin_routes_module(path: str) -> str:
+    """The module of :data:`ROUTE_MODULES`' admin routes that answers ``path`` (a canonical
+    path, as :func:`.app.canonical_event` makes it): the admin function loads only that module on
+    a cold start. A path no route answers goes to the organisers' module, which answers it 404."""
+    parts = path.strip("/").split("/")
+    if len(parts) > 2 and parts[0] in ("boards", "seasons") and parts[2] == "webhooks":
+        return "webhooks"
+    if parts[0] == "seasons":
+        return "season_changes"
+    return "organisers"
+
+
 def router(name: str) -> Router:
     """``push_router``, ``pull_router``, ``admin_router`` or ``card_router``, with every one of its
     routes."""
