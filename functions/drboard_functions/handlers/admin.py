@@ -83,13 +83,13 @@ class AdminRoutes:
         return self.app
 
 
-routes = AdminRoutes()
+admin_routes = AdminRoutes()
 
 
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
 @metrics.log_metrics(capture_cold_start_metric=True)
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
     event = canonical_event(event)
-    app = routes.for_path(str(event.get("rawPath") or ""))
+    app = admin_routes.for_path(str(event.get("rawPath") or ""))
     app.append_context(service=wiring.service_from_environment())
     return app.resolve(event, context)
