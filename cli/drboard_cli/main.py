@@ -111,11 +111,11 @@ class Context:
 
     @property
     def place(self) -> str:
-        """Which board a push went to, in the words a racer checks after it: an event's board
-        by its address, or the board on this computer by its file."""
+        """Where the board a push goes to is, in the words a racer checks after it: an event's
+        board by its address (``at URL``), the board on this computer by its file."""
         if self.endpoint:
-            return f"the board at {self.endpoint}"
-        return f"the board on this computer ({self.db})"
+            return f"at {self.endpoint}"
+        return f"on this computer ({self.db})"
 
     @property
     def embedded_file(self) -> Path | None:

@@ -141,7 +141,7 @@ def _push_batch(ctx: Context, paths: tuple[Path, ...], records: list[Record],
     if board_id:
         _check_batch(ctx, paths, records, board_id)
     where = board_id or "each run's track board"
-    err().print(f"Pushing {len(records)} runs to {where} on {ctx.place}, one at a time; a run the "
+    err().print(f"Pushing {len(records)} runs to {where} {ctx.place}, one at a time; a run the "
                 "board refuses is named and the others still go.", soft_wrap=True)
     refused: list[tuple[Path, DomainError]] = []
     pushed_to: list[str] = []
@@ -169,9 +169,9 @@ def _say_where(ctx: Context) -> None:
     """Name the board a push went to: a racer who meant an event's board and is still on the
     one on this computer (no `drboard join` yet, or a mistyped one) sees it at once."""
     if ctx.endpoint:
-        err().print(f"Pushed to {ctx.place}.", soft_wrap=True)
+        err().print(f"Pushed to the board {ctx.place}.", soft_wrap=True)
     else:
-        err().print(f"Pushed to {ctx.place}. To push to an event's board instead, run the "
+        err().print(f"Pushed to the board {ctx.place}. To push to an event's board instead, run the "
                     "`drboard join` line its screen shows.", soft_wrap=True)
 
 
@@ -215,7 +215,7 @@ def _watch(ctx: Context, paths: tuple[Path, ...], overrides: Overrides, board_id
         raise click.UsageError(f"--watch needs a training folder; {paths[0]} is not a folder")
     target = ctx.endpoint or str(ctx.db.resolve())
     memory = PushedEvaluations(config.watch_memory_path(), f"{target} {board_id or ''}".strip())
-    err().print(f"Pushing to {ctx.place}.", soft_wrap=True)
+    err().print(f"Pushing to the board {ctx.place}.", soft_wrap=True)
     watcher = Watcher(paths[0], ctx.board, overrides, board_id, console=out(),
                       interval_s=interval_s, only_new=only_new, memory=memory)
     previous = signal.signal(signal.SIGTERM, interrupt)  # stop as Ctrl-C does
