@@ -15,8 +15,9 @@ for another in print is refused outright:
   another racer's: ``АСЕ`` in Cyrillic beside a Latin ``ACE`` (see :func:`confusable_skeleton`).
 
 The Unicode properties (default-ignorable code points) come from ``regex`` and the scripts and
-confusable skeletons from ``disarm``; both are imported when a name is first checked, so that
-reading stored records (which are never checked again) does not load them.
+confusable skeletons from ``disarm``; both are imported when a name that needs them is first
+checked (an alias in ASCII needs neither to be checked, only its skeleton needs ``disarm``), so
+that reading stored records (which are never checked again) does not load them.
 
 Every other name and text a record holds is bounded to printable text by :func:`text_problem`:
 no control, format (bidirectional controls included), surrogate, private-use or separator
@@ -57,6 +58,8 @@ def alias_problem(alias: str) -> str | None:
         if _invisible(char):
             return (f"contains the invisible or control character U+{ord(char):04X} "
                     f"({unicodedata.name(char, 'unnamed')})")
+    if alias.isascii():  # Latin letters, and digits and signs common to every script
+        return None
     scripts = _scripts(unicodedata.normalize("NFKC", alias))
     if len(scripts) > 1 and not any(scripts <= allowed for allowed in _WRITTEN_TOGETHER):
         named = " and ".join(sorted(script.title() for script in scripts))
@@ -101,8 +104,10 @@ def texts(value: Any, path: tuple[str | int, ...] = ()) -> Iterator[tuple[tuple[
 
 def _invisible(char: str) -> bool:
     category = unicodedata.category(char)
-    return (category in _INVISIBLE or (category == "Zs" and char != " ") or char in _BLANK
-            or _default_ignorable().match(char) is not None)
+    if category in _INVISIBLE or (category == "Zs" and char != " ") or char in _BLANK:
+        return True
+    # No ASCII character is default-ignorable: regex's tables are loaded for the others only.
+    return not char.isascii() and _default_ignorable().match(char) is not None
 
 
 @cache

@@ -47,7 +47,6 @@ from ..models.domain import (
     SubmissionLimits,
     with_flag,
 )
-from ..models.notices import EntryChange
 from ..models.views import Me, PushAccepted, PushReceipt
 from ..stores.base import (
     AliasConflict,
@@ -60,7 +59,6 @@ from ..stores.base import (
 from ..views import design_of, entry_view, history_item
 from .boards import BoardKeeper, check_open, racer_key
 from .copies import Verdict, judge, run_prints
-from .seasons import check_entrant
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
 #: How many times a push is checked again when the board's settings change under it.
@@ -103,7 +101,7 @@ class Pushing:
             if stored is not None:
                 return self._duplicate_receipt(stored, record.racer)
             check_open(board, now)
-            check_entrant(self.keeper, board_id, record.racer)
+            self._check_final(board_id, record.racer)
             self._check_limits(board, key, record.racer, now)
             verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
             submission, entry = scored_write(record, board, now, verdict.flags)
@@ -144,6 +142,8 @@ class Pushing:
             stored = self.store.get_submission(board_id, key, record.submission_id)
             return self._duplicate_receipt(stored or submission, record.racer)
         if outcome.improved and self.keeper.listener is not None:
+            from ..models.notices import EntryChange  # only `drboard serve` listens
+
             self.keeper.listener(EntryChange(board_id=board_id, before=before,
                                              after=outcome.entry, at=now))
         self._tell_organiser(board_id, record, verdict, caller, now)
@@ -155,6 +155,15 @@ class Pushing:
                 receipt=f"/boards/{quote(board_id, safe='')}/racers/{quote(record.racer, safe='')}",
                 message="stored; the board could not read its rank back just now "
                         "(`drboard status` shows it, and pushing the run again answers it)")
+
+    def _check_final(self, board_id: str, racer: str) -> None:
+        """A season's final takes its qualifiers only (``NotQualified``). The seasons' rules are
+        loaded for a board that is a final: a push to any other board does without them."""
+        finals = [link for link in self.store.season_links(board_id) if link.final]
+        if finals:
+            from .seasons import check_entrant
+
+            check_entrant(self.keeper, board_id, racer, finals)
 
     def _check_limits(self, board: Board, key: str, racer: str, now: datetime) -> None:
         """The racer's cooldown and maximum, before the archive is written (the write checks

@@ -190,15 +190,13 @@ class Seasons:
         """The seasons the board is a round or the final of."""
         return self.store.season_links(board_id)
 
-    def check_entrant(self, board_id: str, racer: str) -> None:
+    def check_entrant(self, board_id: str, racer: str, finals: Sequence[SeasonLink]) -> None:
         """Refuse a push to a season's final by a racer who did not qualify for it (a board
-        that is the final of several seasons takes each one's qualifiers)."""
-        gates = [link for link in self.store.season_links(board_id) if link.final]
-        if not gates:
-            return
+        that is the final of several seasons takes each one's qualifiers); ``finals``: the
+        board's links to the seasons it is the final of."""
         key = racer_key(racer)
         refusals: list[str] = []
-        for link in gates:
+        for link in finals:
             season = self.store.get_season(link.season_id)
             if season is None or season.final is None or season.final.board_id != board_id:
                 continue
@@ -357,10 +355,11 @@ class Seasons:
         return self._standings(saved)
 
 
-def check_entrant(keeper: BoardKeeper, board_id: str, racer: str) -> None:
-    """The push path's check of a season's final: a racer who did not qualify is refused
-    (``NotQualified``); any other board lets everyone push."""
-    Seasons(keeper).check_entrant(board_id, racer)
+def check_entrant(keeper: BoardKeeper, board_id: str, racer: str,
+                  finals: Sequence[SeasonLink]) -> None:
+    """The push path's check of a season's final (``finals``: the board's links to the seasons
+    it is the final of): a racer who did not qualify is refused (``NotQualified``)."""
+    Seasons(keeper).check_entrant(board_id, racer, finals)
 
 
 def _links(season: Season) -> dict[str, SeasonLink]:

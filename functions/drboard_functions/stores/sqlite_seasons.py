@@ -13,8 +13,11 @@ from collections.abc import Mapping, Sequence
 from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING
 
-from ..models.seasons import RoundResults, Season, SeasonLink
 from .base import SeasonConflict, SeasonSlice, StoredBoard, page_token, read_page_token
+
+if TYPE_CHECKING:  # the models are imported where a row is read: a push to a board in no season
+    # reads none, and leaves the seasons' models out
+    from ..models.seasons import RoundResults, Season, SeasonLink
 
 SEASON_SCHEMA = """
 CREATE TABLE IF NOT EXISTS seasons (
@@ -51,6 +54,8 @@ class SqliteSeasons:
         def get_board(self, board_id: str) -> StoredBoard | None: ...
 
     def get_season(self, season_id: str) -> Season | None:
+        from ..models.seasons import Season
+
         row = self._db.execute("SELECT season FROM seasons WHERE season_id = ?", (season_id,)).fetchone()
         return Season.model_validate_json(row[0]) if row else None
 
@@ -77,6 +82,8 @@ class SqliteSeasons:
         return season
 
     def seasons_page(self, after: str | None, limit: int) -> SeasonSlice:
+        from ..models.seasons import Season
+
         rows = self._db.execute(
             "SELECT season_id, season FROM seasons WHERE season_id > ? ORDER BY season_id LIMIT ?",
             (read_page_token(after, 1)[0] if after else "", limit + 1)).fetchall()
@@ -86,7 +93,11 @@ class SqliteSeasons:
 
     def season_links(self, board_id: str) -> list[SeasonLink]:
         rows = self._db.execute("SELECT link FROM season_links WHERE board_id = ? ORDER BY season_id",
-                                (board_id,))
+                                (board_id,)).fetchall()
+        if not rows:
+            return []
+        from ..models.seasons import SeasonLink
+
         return [SeasonLink.model_validate_json(row[0]) for row in rows]
 
     def boards_by_id(self, board_ids: Sequence[str]) -> dict[str, StoredBoard]:
@@ -94,6 +105,8 @@ class SqliteSeasons:
         return {board_id: stored for board_id, stored in found.items() if stored is not None}
 
     def round_results(self, season_id: str) -> dict[str, RoundResults]:
+        from ..models.seasons import RoundResults
+
         rows = self._db.execute("SELECT board_id, results FROM round_results WHERE season_id = ?",
                                 (season_id,))
         return {row[0]: RoundResults.model_validate_json(row[1]) for row in rows}

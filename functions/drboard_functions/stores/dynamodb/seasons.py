@@ -22,16 +22,17 @@ from typing import TYPE_CHECKING
 
 from botocore.exceptions import ClientError
 
-from ...models.seasons import RoundResults, Season, SeasonLink
 from ..aws_errors import code_of, translating
 from ..base import SeasonConflict, SeasonSlice, StoredBoard, page_token, read_page_token
 from .codecs import BOARD_SK, BOARDS_INDEX, key, stored_board, text
 from .transaction import Slots
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the models are imported where an item is read: a push to a board in no
+    # season reads none, and its cold start leaves the seasons' models out
     from mypy_boto3_dynamodb.client import DynamoDBClient
     from mypy_boto3_dynamodb.type_defs import AttributeValueTypeDef, PutTypeDef, QueryInputTypeDef
 
+    from ...models.seasons import RoundResults, Season, SeasonLink
     from .codecs import Item
 
 SEASON_KIND = "season"
@@ -87,6 +88,8 @@ class DynamoDbSeasons:
         def _batch_get(self, keys: Sequence[dict[str, AttributeValueTypeDef]]) -> Iterator[Item]: ...
 
     def get_season(self, season_id: str) -> Season | None:
+        from ...models.seasons import Season
+
         item = self.get_item(season_partition(season_id), SEASON_SK)
         return Season.model_validate_json(item["data"]["S"]) if item else None
 
@@ -134,6 +137,8 @@ class DynamoDbSeasons:
             request["ExclusiveStartKey"] = {"board_kind": text(SEASON_KIND),
                                             "board": text(season_partition(season_id)),
                                             "sk": text(SEASON_SK)}
+        from ...models.seasons import Season
+
         items, more = self._page(request, limit)
         seasons = [Season.model_validate_json(item["data"]["S"]) for item in items]
         return SeasonSlice(seasons, page_token([seasons[-1].season_id]) if more and seasons else None)
@@ -145,6 +150,10 @@ class DynamoDbSeasons:
             "ExpressionAttributeValues": {":board": text(board_id), ":prefix": text(LINK_PREFIX)},
             "ProjectionExpression": "#data", "ExpressionAttributeNames": {"#data": "data"},
         })
+        if not items:
+            return []
+        from ...models.seasons import SeasonLink
+
         return [SeasonLink.model_validate_json(item["data"]["S"]) for item in items]
 
     def boards_by_id(self, board_ids: Sequence[str]) -> dict[str, StoredBoard]:
@@ -153,6 +162,8 @@ class DynamoDbSeasons:
         return {stored.board.board_id: stored for stored in boards}
 
     def round_results(self, season_id: str) -> dict[str, RoundResults]:
+        from ...models.seasons import RoundResults
+
         items = self._query({
             "TableName": self.table, "ConsistentRead": True,
             "KeyConditionExpression": "board = :board",
