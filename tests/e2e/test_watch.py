@@ -124,6 +124,9 @@ def test_watch_pushes_each_evaluation_as_it_appears_and_stops_on_ctrl_c(
     wait_until(lambda: pushed() == 1, "the first evaluation on the board")
     add_evaluation(training)
     wait_until(lambda: pushed() == 2, "the second evaluation on the board")
+    # Ctrl-C once the racer sees the second receipt: a run committed to the board is printed a
+    # moment later, after its rank is read back.
+    watching.wait_for_line(f"{SECOND}: Comet")
 
     code, output, errors = watching.stop(signal.SIGINT)
 
