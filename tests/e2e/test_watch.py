@@ -25,6 +25,12 @@ DRBOARD = [sys.executable, "-m", "drboard_cli"]
 TIMEOUT_S = 30.0
 
 
+def _as_from_a_terminal() -> None:
+    """Ctrl-C reaches the watch as it does from a terminal, even when the tests themselves run in
+    the background of a shell, which starts them with SIGINT ignored (children inherit that)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 class Watch:
     """A running `drboard push --watch`, its output read line by line as it comes."""
 
@@ -37,7 +43,8 @@ class Watch:
         self.db = tmp_path / "board.db"
         self.process = subprocess.Popen(
             [*DRBOARD, "--db", str(self.db), "push", "--watch", str(folder), "--interval", "0.2"],
-            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            preexec_fn=_as_from_a_terminal)
         self.lines: queue.Queue[str] = queue.Queue()
         self.output: list[str] = []
         self.reader = threading.Thread(target=self._read, daemon=True)
