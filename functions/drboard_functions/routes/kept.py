@@ -274,6 +274,7 @@ class KeptPages:
                 copy.version, fresh_until, copy.etag, copy.headers, copy.not_modified_headers,
                 copy.text))
 
+
 class WantedCard(NamedTuple):
     """A racer's result card, as a request asks for it."""
 
