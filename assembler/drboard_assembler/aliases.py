@@ -16,8 +16,8 @@ for another in print is refused outright:
 
 The Unicode properties (default-ignorable code points) come from ``regex`` and the scripts and
 confusable skeletons from ``disarm``; both are imported when a name that needs them is first
-checked (an alias in ASCII needs neither to be checked, only its skeleton needs ``disarm``), so
-that reading stored records (which are never checked again) does not load them.
+checked (an alias in ASCII needs neither, to be checked or for its skeleton), so that reading
+stored records (which are never checked again) does not load them.
 
 Every other name and text a record holds is bounded to printable text by :func:`text_problem`:
 no control, format (bidirectional controls included), surrogate, private-use or separator
@@ -70,11 +70,24 @@ def alias_problem(alias: str) -> str | None:
 def confusable_skeleton(alias: str) -> str:
     """The alias's confusable skeleton (UTS #39, with ``1``/``l``/``I`` and ``0``/``O`` as one):
     two aliases with one skeleton could pass for each other in print."""
-    from disarm import skeleton_key
-
     # Before any case folding: ``I`` passes for ``l`` only while it is a capital.
     spelled = " ".join(unicodedata.normalize("NFKC", alias).split())
-    return skeleton_key(spelled, digit_policy="tr39") or alias_key(alias)
+    if spelled.isascii():  # each character's skeleton on its own: disarm's tables stay unloaded
+        skeleton = " ".join(spelled.translate(_ASCII_SKELETON).split())
+    else:
+        from disarm import skeleton_key
+
+        skeleton = skeleton_key(spelled, digit_policy="tr39")
+    return skeleton or alias_key(alias)
+
+
+#: The skeleton of each printable ASCII character, as disarm's ``skeleton_key`` gives it (its
+#: case folded, ``0``/``O``, ``1``/``l``/``I``/``|`` as one, quotes as apostrophes). An ASCII
+#: text's skeleton is its characters' skeletons side by side, white space collapsed; a test
+#: checks both against disarm.
+_ASCII_SKELETON = str.maketrans(
+    {chr(code): chr(code).lower() for code in range(32, 127)}
+    | {"0": "o", "1": "l", "I": "l", "|": "l", '"': "''", "`": "'"})
 
 
 def text_problem(text: str) -> str | None:

@@ -31,7 +31,10 @@ The HTTP side is uvicorn (h11): keep-alive without Nagle's delay, a listen backl
 connections let go (also one that connects and never finishes a request), graceful shutdown.
 Each request's resolver call runs in a small thread pool, each with resolvers of its own, so a
 slow one holds neither the server loop nor the other requests; an event stream holds no thread.
-Pushes to the embedded board, which takes one write at a time, take turns in a thread of their own.
+The embedded board takes one write at a time: a push to it is answered on the server's loop while
+no other process is writing the board's file (a hop to another thread would cost more than the
+push's own work, as the threads take turns at the interpreter), and waits its turn in a thread of
+its own when one is.
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ import uuid
 from collections.abc import Awaitable, Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 from urllib.parse import parse_qsl, unquote, urlsplit
 
 import uvicorn
@@ -94,6 +97,8 @@ _EVENTS_PATH = re.compile(r"^/boards/([^/]+)/events$")
 _PUSH_PATH = re.compile(r"^/boards/([^/]+)/submissions$")
 
 _log = Console(stderr=True, highlight=False)
+#: Whether the log goes to a terminal (rich's colours) or a file (plain lines): asked once.
+_LOG_TO_TERMINAL = _log.is_terminal
 
 
 @dataclass
@@ -217,11 +222,13 @@ class BoardServer:
         # A board's version on the embedded board is one row of a local file: read on the
         # server's loop, a kept page costs no hop to a worker thread. (A DynamoDB table's is a
         # network call: it is read in the pool.)
-        self.versions_on_loop = isinstance(service.store, SqliteStore)
+        self.embedded = service.store if isinstance(service.store, SqliteStore) else None
+        self.versions_on_loop = self.embedded is not None
         self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
-        # The embedded board takes one write at a time: pushes wait their turn in one thread of
-        # their own, rather than in SQLite's busy handler (which sleeps between its tries) in
-        # threads that contend for the interpreter meanwhile. A DynamoDB table takes them at once.
+        # The embedded board takes one write at a time: a push is answered on the loop while the
+        # file is free (``push_here``), else it waits its turn in one thread of its own, rather
+        # than in SQLite's busy handler (which sleeps between its tries) in threads that contend
+        # for the interpreter meanwhile. A DynamoDB table takes pushes at once, in the pool.
         self.writes = (ThreadPoolExecutor(1, thread_name_prefix="drboard-serve-push")
                        if self.versions_on_loop else self.pool)
         self.open_streams = 0
@@ -273,17 +280,34 @@ class BoardServer:
             return "missing"
 
     def handle_event(self, event: dict[str, Any]) -> dict[str, Any]:
+        handled = self._handled(event)
+        self._note(handled)
+        return handled.result
+
+    def push_here(self, event: dict[str, Any]) -> dict[str, Any] | None:
+        """A push to the embedded board answered on the calling thread (the server's loop) if no
+        other process is writing the board's file: None if one is (nothing was written; the push
+        then waits its turn in the writer thread, where waiting holds up no other request)."""
+        assert self.embedded is not None
+        with self.embedded.without_waiting() as attempt:
+            handled = self._handled(event)
+        if attempt.met_writer:
+            return None
+        self._note(handled)
+        return handled.result
+
+    def _handled(self, event: dict[str, Any]) -> _Handled:
         from drboard_functions.routes import canonical_event
 
         event = canonical_event(event)
         http = event["requestContext"]["http"]
         local = is_loopback(http["sourceIp"])
         if event["rawPath"] == "/join" and http["method"] in ("GET", "POST"):
-            return self._join(event) if http["method"] == "POST" else self._join_page(event)
+            return _Handled(self._join(event) if http["method"] == "POST" else self._join_page(event))
         if not local and self.organiser_routes.matches(http["method"], event["rawPath"]):
-            return _refused(NotAuthorized(
+            return _Handled(_refused(NotAuthorized(
                 "organiser requests are answered only on the computer running `drboard serve`; "
-                f"this one came from {http['sourceIp']}"))
+                f"this one came from {http['sourceIp']}")))
         # serve builds every event itself, so no client can claim an authorizer context
         caller = LOCAL_ORGANISER if local else self._racer(event["headers"])
         if caller is not None:
@@ -294,8 +318,7 @@ class BoardServer:
                               self.sign_in, self.invite)
         finally:
             self.resolvers.put(resolvers)
-        self._note(event, result, caller)
-        return result
+        return _Handled(result, event, caller)
 
     def invite(self) -> Invite:
         """What the pages tell racers: this board's network address and its join code."""
@@ -348,19 +371,21 @@ class BoardServer:
     def say(self, line: str) -> None:
         _log_event(f"{time.strftime('%H:%M:%S')}  {line}")
 
-    def _note(self, event: dict[str, Any], result: dict[str, Any], caller: Caller | None) -> None:
-        """Log what a request did, for people; remember the alias a joined racer pushes as."""
+    def _note(self, handled: _Handled) -> None:
+        """Log what a request the routes answered did, for people; remember the alias a joined
+        racer pushes as."""
+        event, result, caller = handled.event, handled.result, handled.caller
+        if event is None:  # answered before the routes, and said then
+            return
         http = event["requestContext"]["http"]
         method, path, status = http["method"], event["rawPath"], int(result.get("statusCode", 200))
         who = _who(caller, http["sourceIp"])
         body = result.get("body") or ""
         pushed = method == "POST" and _PUSH_PATH.match(path)
         if pushed and status in (200, 201):
-            from drboard_functions.models.views import PushReceipt
-
-            receipt = PushReceipt.model_validate_json(body)
+            receipt = json.loads(body)  # the receipt the routes just encoded: read, not checked
             if caller is not None and self.desk is not None and caller.principal.startswith("join:"):
-                self.desk.note_alias(caller.principal, receipt.entry.racer)
+                self.desk.note_alias(caller.principal, receipt["entry"]["racer"])
             self.say(_push_line(receipt) + ("" if caller is None or caller.principal == "local"
                                             else f"  [{http['sourceIp']}, {caller.principal}]"))
         elif method == "PUT" and path == "/me/alias" and status == 200:
@@ -410,10 +435,11 @@ class BoardServer:
         query = scope["query_string"].decode("latin-1")
         event = http_event(scope["method"], f"{path}?{query}" if query else path,
                            _header_dict(scope), body, _client_ip(scope))
-        loop = asyncio.get_running_loop()
         pushing = scope["method"] == "POST" and _PUSH_PATH.match(path)
-        executor = self.writes if pushing else self.pool
-        result = await loop.run_in_executor(executor, self.handle_event, event)
+        result = self.push_here(event) if pushing and self.embedded is not None else None
+        if result is None:
+            executor = self.writes if pushing else self.pool
+            result = await asyncio.get_running_loop().run_in_executor(executor, self.handle_event, event)
         status, headers, data = _http_answer(result)
         await send({"type": "http.response.start", "status": status, "headers": headers})
         await send({"type": "http.response.body", "body": data})
@@ -476,6 +502,14 @@ class BoardServer:
                 quiet = 0.0
             await asyncio.wait([gone], timeout=STREAM_POLL_S)
             quiet += STREAM_POLL_S
+
+
+class _Handled(NamedTuple):
+    """A request's answer; for one the routes answered, its event as they saw it and its caller."""
+
+    result: dict[str, Any]
+    event: dict[str, Any] | None = None
+    caller: Caller | None = None
 
 
 @dataclass(frozen=True)
@@ -548,19 +582,20 @@ def _bearer(headers: dict[str, str]) -> str | None:
     return token.strip() if scheme.lower() == "bearer" and token.strip() else None
 
 
-def _push_line(receipt: Any) -> str:
-    """``Ada pushed ada-v7 to club-final: 9.120 s, rank 2 of 12, new best (+0.465 s)``."""
+def _push_line(receipt: dict[str, Any]) -> str:
+    """``Ada pushed ada-v7 to club-final: 9.120 s, rank 2 of 12, new best (+0.465 s)`` from a
+    push's receipt (its JSON, read)."""
     from drboard_functions.display import gap, percent, seconds
 
-    pushed = receipt.submission
-    result = (seconds(pushed.time_ms) if pushed.qualified
-              else f"{percent(pushed.best_completion_pct)} done, not qualified")
-    outcome = ("already on the board" if receipt.status == "duplicate"
-               else "new best" if receipt.improved else "not better than their best")
-    if receipt.rank > 1 and receipt.entry.gap_ms is not None:
-        outcome += f", {gap(receipt.entry.gap_ms)} to the leader"
-    return (f"{receipt.entry.racer} pushed {pushed.model_name} to {receipt.board_id}: {result}, "
-            f"rank {receipt.rank} of {receipt.participants}, {outcome}")
+    pushed, entry = receipt["submission"], receipt["entry"]
+    result = (seconds(pushed["time_ms"]) if pushed["qualified"]
+              else f"{percent(pushed['best_completion_pct'])} done, not qualified")
+    outcome = ("already on the board" if receipt["status"] == "duplicate"
+               else "new best" if receipt["improved"] else "not better than their best")
+    if receipt["rank"] > 1 and entry.get("gap_ms") is not None:
+        outcome += f", {gap(entry['gap_ms'])} to the leader"
+    return (f"{entry['racer']} pushed {pushed['model_name']} to {receipt['board_id']}: {result}, "
+            f"rank {receipt['rank']} of {receipt['participants']}, {outcome}")
 
 
 def _who(caller: Caller | None, address: str) -> str:
@@ -582,7 +617,7 @@ def _error_text(body: str) -> str:
 
 
 def _log_event(line: str) -> None:
-    if _log.is_terminal:
+    if _LOG_TO_TERMINAL:
         _log.out(line, highlight=False)
     else:
         sys.stderr.write(line + "\n")
@@ -603,7 +638,7 @@ def reachable_host(host: str) -> str:
 
 
 def _log_request(line: str) -> None:
-    if _log.is_terminal:
+    if _LOG_TO_TERMINAL:
         _log.out(line, style="dim", highlight=False)
     else:  # a log file: plain lines, at a hundredth of rich's cost per request
         sys.stderr.write(line + "\n")

@@ -68,8 +68,8 @@ def test_clients_side_by_side_each_get_their_own_answer(server: BoardServer) -> 
     assert problems == []
 
 
-def test_a_pull_is_answered_while_a_push_waits_for_the_board(server: BoardServer,
-                                                            tmp_path: Path) -> None:
+def test_a_pull_is_answered_while_a_push_waits_for_the_board(server: BoardServer, tmp_path: Path,
+                                                            capfd: pytest.CaptureFixture[str]) -> None:
     _create_boards(server)
     holder = sqlite3.connect(tmp_path / "event.db", isolation_level=None)
     holder.execute("BEGIN IMMEDIATE")  # another program writing the board: pushes wait for it
@@ -88,6 +88,25 @@ def test_a_pull_is_answered_while_a_push_waits_for_the_board(server: BoardServer
         holder.close()
     assert pusher.getresponse().status == 201
     pusher.close()
+    # The organiser's log tells the push once, as stored: not first as refused by the busy board.
+    log = capfd.readouterr().err
+    assert log.count("Ada pushed") == 1, log
+    assert "refused" not in log, log
+
+
+def test_pushes_to_a_free_board_are_each_told_once_in_the_log(server: BoardServer,
+                                                              capfd: pytest.CaptureFixture[str]) -> None:
+    _create_boards(server)
+    pusher = _connect(server)
+    for number, racer in enumerate(("Ada", "Grace", "Alan")):
+        record = make_record(racer, [(9000 + 100 * number, 100)]).model_dump(mode="json")
+        assert _call(pusher, "POST", f"/boards/{BOARDS[0]}/submissions", record)[0] == 201
+    pusher.close()
+    log = capfd.readouterr().err
+    assert [line.split("  ", 1)[1].split(":")[0] for line in log.splitlines() if " pushed " in line] == [
+        f"{racer} pushed {make_record(racer, [(9000, 100)]).model_name} to {BOARDS[0]}"
+        for racer in ("Ada", "Grace", "Alan")]
+    assert "rank 3 of 3" in log
 
 
 def test_event_streams_do_not_hold_up_requests(server: BoardServer) -> None:

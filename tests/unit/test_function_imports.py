@@ -143,11 +143,11 @@ def test_the_admin_function_loads_only_the_routes_of_the_request(tmp_path: Path)
 
 def test_a_push_to_a_board_in_no_season_loads_no_season_webhook_or_unicode_table(tmp_path: Path) -> None:
     """A cold push of an ASCII alias to a board that is no season's final leaves out the seasons'
-    models and rules, the live board's notices, and regex's Unicode tables."""
+    models and rules, the live board's notices, and the Unicode tables of regex and disarm."""
     found = probe("push", tmp_path / "board.db", "push.json")
     assert found["answered"] == {"push.json": 201}
     assert among(found["loaded"], ("drboard_functions.models.seasons", "drboard_functions.service.seasons",
-                                   "drboard_functions.models.notices", "regex")) == []
+                                   "drboard_functions.models.notices", "regex", "disarm")) == []
 
 
 def test_each_admin_route_is_found_in_the_module_that_declares_it() -> None:

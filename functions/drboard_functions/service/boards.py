@@ -159,14 +159,13 @@ class BoardKeeper:
     def for_record(self, record: Record, board_id: str | None, now: datetime) -> StoredBoard:
         """The board a run is pushed to (its track's default board unless named), made by the
         run's push if it is the default board and does not exist yet."""
-        default = default_board(record, now)
-        board_id = board_id or default.board_id
+        default_id = default_board_id(record.track, record.direction, record.race_type)
+        board_id = board_id or default_id
         stored = self.store.get_board(board_id)
         if stored is None:
-            if board_id != default.board_id:
-                raise BoardNotFound(
-                    f"no board {board_id!r}; this run belongs on {default.board_id!r}")
-            stored = self.store.create_board(default)
+            if board_id != default_id:
+                raise BoardNotFound(f"no board {board_id!r}; this run belongs on {default_id!r}")
+            stored = self.store.create_board(default_board(record, now))
         check_not_deleted(stored.board)
         check_belongs(record, stored.board)
         return stored

@@ -14,6 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from datetime import datetime, timedelta
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -182,6 +183,14 @@ EXPORT_PAGE_ROWS = 500
 BUSY_RETRY_AFTER_S = 1
 
 
+@dataclass
+class FirstTry:
+    """Writes tried without waiting (``SqliteStore.without_waiting``): whether one met another
+    writer of the file."""
+
+    met_writer: bool = False
+
+
 class SqliteStore(SqliteSeasons):
     """One SQLite connection per thread that uses the store (WAL: readers run alongside the one
     writer; writers take turns through BEGIN IMMEDIATE). ``:memory:`` is one database per
@@ -271,7 +280,7 @@ class SqliteStore(SqliteSeasons):
             with self._savepoint() as db:
                 yield db
             return
-        with _busy_as_store_busy(self.path):
+        with _busy_as_store_busy(self.path, getattr(self._local, "first_try", None)):
             self._db.execute("BEGIN IMMEDIATE")
             try:
                 yield self._db
@@ -292,6 +301,21 @@ class SqliteStore(SqliteSeasons):
             db.execute("RELEASE write")
             raise
         db.execute("RELEASE write")
+
+    @contextmanager
+    def without_waiting(self) -> Iterator[FirstTry]:
+        """The block's writes on this thread fail at once (StoreBusy) rather than wait for another
+        writer of the file; the answer says whether one met such a writer (then nothing it tried
+        was written, and the caller may try again where waiting holds nothing up)."""
+        attempt = FirstTry()
+        db = self._db
+        db.execute("PRAGMA busy_timeout = 0")
+        self._local.first_try = attempt
+        try:
+            yield attempt
+        finally:
+            self._local.first_try = None
+            db.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
 
     @contextmanager
     def held_writes(self) -> Iterator[None]:
@@ -929,12 +953,14 @@ class SqliteStore(SqliteSeasons):
 
 
 @contextmanager
-def _busy_as_store_busy(path: str) -> Iterator[None]:
+def _busy_as_store_busy(path: str, attempt: FirstTry | None = None) -> Iterator[None]:
     try:
         yield
     except sqlite3.OperationalError as error:
         if error.sqlite_errorcode & 0xFF not in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED):
             raise
+        if attempt is not None:
+            attempt.met_writer = True
         raise StoreBusy(f"the board {path} is busy with another writer (waited "
                         f"{BUSY_TIMEOUT_S:g} s); nothing was stored, try again",
                         BUSY_RETRY_AFTER_S) from error
