@@ -86,6 +86,18 @@ class SeasonStoreContract:
         assert board_version(store, "feb") == before["feb"] + 2
         assert board_version(store, "jan") == before["jan"] + 1, "only the boards whose links change"
 
+    def test_a_board_a_season_took_in_may_be_in_a_season_for_good(self, store: BoardStore) -> None:
+        """Where a store tells a board no season took in, a push to it looks for no final: once a
+        season takes the board in, it is looked for, even after the season let it go."""
+        for board_id in ("jan", "final"):
+            store.create_board(named_board(board_id))
+        store.save_season(season(rounds=("jan",), final="final"),
+                          {"jan": link(), "final": link(final=True)})
+        store.save_season(season(version=2, final="final"), {"jan": None})
+        for board_id in ("jan", "final"):
+            for stored in (store.get_board(board_id), store.push_reads(board_id, "ada", "0" * 64).board):
+                assert stored is not None and stored.maybe_in_a_season, board_id
+
     def test_a_board_lists_every_season_it_belongs_to_by_id(self, store: BoardStore) -> None:
         store.create_board(named_board("final"))
         store.save_season(season("winter", rounds=("final",)), {"final": link("winter")})

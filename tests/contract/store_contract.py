@@ -212,16 +212,23 @@ class StoreContract(SeasonStoreContract):
         assert participants(store) == 1
         assert [s.submitted_at for s in store.history("ada")] == [at(1)]
 
-    def test_a_pushs_first_read_gives_the_events_bans_and_the_submission(self, store: BoardStore) -> None:
+    def test_a_pushs_first_read_gives_the_board_the_events_bans_the_submission_and_the_entry(
+            self, store: BoardStore) -> None:
         record = make_record("Ada", lap(12000))
-        assert store.bans_and_submission(TRACK, "ada", record.submission_id) == (EventBans(), 0, None)
+        assert store.push_reads("nowhere", "ada", record.submission_id) == (None, EventBans(), 0, None, None)
+        first = store.push_reads(TRACK, "ada", record.submission_id)
+        assert (first.board, first.submission, first.entry) == (store.get_board(TRACK), None, None)
         stored = submit(store, record, at(1))
         version = store.save_event_bans(EventBans(racers=["bob"]), 0)
-        bans, bans_version, submission = store.bans_and_submission(TRACK, "ada", record.submission_id)
-        assert (bans, bans_version) == (EventBans(racers=["bob"]), version) == store.event_bans()
-        assert submission == store.get_submission(TRACK, "ada", record.submission_id)
-        assert submission is not None and submission.submitted_at == stored.entry.achieved_at
-        assert store.bans_and_submission(TRACK, "bob", record.submission_id)[2] is None
+        read = store.push_reads(TRACK, "ada", record.submission_id)
+        assert read.board == store.get_board(TRACK) and read.board is not None
+        assert read.board.participants == 1
+        assert (read.bans, read.bans_version) == (EventBans(racers=["bob"]), version) == store.event_bans()
+        assert read.submission == store.get_submission(TRACK, "ada", record.submission_id)
+        assert read.submission is not None and read.submission.submitted_at == stored.entry.achieved_at
+        assert read.entry == stored.entry == store.get_entry(TRACK, "ada")
+        other = store.push_reads(TRACK, "bob", record.submission_id)
+        assert (other.submission, other.entry) == (None, None)
 
     def test_duplicate_of_an_older_submission_keeps_the_best(self, store: BoardStore) -> None:
         slow, fast = make_record("Ada", lap(13000)), make_record("Ada", lap(12000))

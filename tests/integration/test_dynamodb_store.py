@@ -31,6 +31,7 @@ from drboard_functions.stores.dynamodb import DynamoDbStore, board_item, entry_i
 from drboard_functions.stores.dynamodb import transaction as push_transaction
 from moto import mock_aws
 
+from tests.contract.season_contract import link, named_board, season
 from tests.contract.store_contract import TRACK, StoreContract, at, make_board, write_for
 from tests.integration.dynamodb_local import REGION, DynamoDbLocal
 from tests.recordkit import make_record
@@ -481,3 +482,17 @@ def test_the_rebuild_ranks_command_builds_a_big_board_a_step_at_a_time(
         again = CliRunner().invoke(cli, ["--db", str(tmp_path / "unused.db"), "board",
                                          "rebuild-ranks", TRACK], obj=lambda db: service)
         assert again.exit_code == 0 and len(steps) == before + 1  # done at once
+
+
+def test_a_board_no_season_took_in_says_so_until_one_does(dynamodb_local: DynamoDbLocal,
+                                                          local_table: str) -> None:
+    """A new board's item tells pushes that no season took it in, so they look for no final;
+    the first season to take it in removes that for good."""
+    store = DynamoDbStore(local_table, dynamodb_local.client())
+    store.create_board(named_board("jan"))
+    fresh = store.push_reads("jan", "ada", "0" * 64).board
+    assert fresh is not None and not fresh.maybe_in_a_season
+    store.save_season(season(rounds=("jan",)), {"jan": link()})
+    store.save_season(season(version=2), {"jan": None})
+    stored = store.get_board("jan")
+    assert stored is not None and stored.maybe_in_a_season

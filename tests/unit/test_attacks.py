@@ -562,16 +562,20 @@ def test_a_write_that_committed_before_a_timeout_answers_what_was_stored(
     assert (receipt.status, receipt.improved, receipt.rank) == ("created", True, 1)
 
 
+@pytest.mark.parametrize("failing", ["front_page", "count_better"])
 def test_a_stored_push_whose_rank_cannot_be_read_answers_202(
-        cloud: tuple[DynamoDbStore, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+        cloud: tuple[DynamoDbStore, Any], monkeypatch: pytest.MonkeyPatch, failing: str) -> None:
+    """The receipt's read (the board's first entries, and the count of those ahead of the racer
+    when they are not all among them) fails after the run was stored: 202, with where to read it."""
     store, _ = cloud
     service = LeaderboardService(store, clock=Clock())
     client = Client(build_app(push_router, pull_router, admin_router), service)
+    assert client.push(make_record("Blaze", [(8000, 100)]))["statusCode"] == 201
 
     def busy(*_: Any) -> int:
         raise StoreBusy("the board's table is busy", 1)
 
-    monkeypatch.setattr(store, "count_better", busy)
+    monkeypatch.setattr(store, failing, busy)
     answer = client.push(make_record("Ada", [(9000, 100)]))
     assert answer["statusCode"] == 202, answer["body"]
     accepted = PushAccepted.model_validate_json(answer["body"])

@@ -113,6 +113,25 @@ def test_a_push_keeps_the_pages_drboard_pull_and_the_api_ask_for(cloud: Calls) -
     assert "limit=25" in event("pull_board.json")["rawQueryString"]
 
 
+def test_a_push_reads_what_it_checks_at_once_and_its_standings_once(cloud: Calls) -> None:
+    """A push reads the board, the event's bans, whether the run is there already and the
+    racer's entry at once; who pushed the run first; and the board's first entries once, for the
+    receipt (rank, leader, racers) and the standings it keeps. A board no season ever took in is
+    not searched for a season's final."""
+    assert push.lambda_handler(push_event("Ada", 12_000), LocalContext())["statusCode"] == 201
+    cloud.clear()
+    answer = push.lambda_handler(push_event("Bo", 11_000), LocalContext())
+    assert answer["statusCode"] == 201
+    receipt = json.loads(answer["body"])
+    assert (receipt["rank"], receipt["participants"], receipt["entry"]["gap_ms"]) == (1, 2, 0)
+    reads = [call for call in cloud if call in ("GetItem", "BatchGetItem", "Query", "TransactGetItems")]
+    assert reads == ["BatchGetItem", "Query", "Query"], "checks; the run's authors; the first entries"
+    shelf = DynamoDbPageShelf(boto3.client("dynamodb", region_name=REGION), TABLE)
+    version, kept = shelf.page(BOARD, shelf_key(Wanted(BOARD, "json", 25), ""))
+    assert kept is not None and kept.version == version
+    assert [e["racer"] for e in json.loads(kept.text)["entries"]] == ["Bo", "Ada"]
+
+
 def test_a_run_that_changes_no_standings_renders_no_page(cloud: Calls) -> None:
     push.lambda_handler(push_event("Ada", 12_000), LocalContext())
     written = page_writes()

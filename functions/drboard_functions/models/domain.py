@@ -169,19 +169,6 @@ def run_mismatches(track: str, direction: str | None, race_type: RaceType,
     return fields
 
 
-class SubmissionLimits(Model):
-    """What a store checks atomically with a push: the racer's last submission on the board is
-    at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``;
-    and, when given, that the board's settings and the event's bans are still at the versions
-    the push was checked against (else BoardChanged, nothing written)."""
-
-    now: datetime
-    cooldown_s: int = 0
-    max_submissions: int | None = None
-    settings_version: int | None = None
-    bans_version: int | None = None
-
-
 class EventBans(Model):
     """Bans across every board of the event: the boards one deployment holds (a stack's table,
     one `drboard serve`, one embedded board file). A banned racer key or sign-in (principal) is
@@ -270,6 +257,22 @@ class Entry(Model):
     design: Design
     score_key: str
     rank_key: str
+
+
+class SubmissionLimits(Model):
+    """What a store checks atomically with a push: the racer's last submission on the board is
+    at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``;
+    and, when given, that the board's settings and the event's bans are still at the versions
+    the push was checked against (else BoardChanged, nothing written)."""
+
+    now: datetime
+    cooldown_s: int = 0
+    max_submissions: int | None = None
+    settings_version: int | None = None
+    bans_version: int | None = None
+    #: The racer's entry as the push read it (None: no entry then). A store may write against
+    #: it without reading it again: its write is conditioned on the entry still being this one.
+    entry_seen: Entry | None = None
 
 
 class Submission(Model):

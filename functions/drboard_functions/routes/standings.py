@@ -21,10 +21,11 @@ newer version, whoever made it (a push in another container, another process wri
 SQLite file); a version changes with every push that changes the standings and with every
 organiser's change (a season taking the board in or letting it go, too: its page links to them),
 in the same write. In the cloud the push, or the organiser's change, that changes a board
-renders its JSON standings and keeps them (:func:`renew_after_change`, in ``handlers.push`` and
-``handlers.admin``), so they are there before anyone asks; other pages are rendered and kept by
-their first reader. In front of the containers the CDN (see template.yaml) keeps viewers off
-them.
+renders its JSON standings and keeps them, so they are there before anyone asks: a push from the
+read of the board its receipt is made from (:func:`keeping_after_pushes`, in ``handlers.push``),
+an organiser's change from a read of its own (:func:`renew_after_change`, in ``handlers.admin``);
+other pages are rendered and kept by their first reader. In front of the containers the CDN (see
+template.yaml) keeps viewers off them.
 
 A page also depends on the clock: the board opens and closes at set times (its status, and
 whether designs show), and the web page counts down to that moment. A copy is kept until the
@@ -35,7 +36,7 @@ next of these moments only, and a web page showing a countdown for at most
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import datetime, timedelta
 from typing import TYPE_CHECKING
 from weakref import WeakKeyDictionary
@@ -49,9 +50,11 @@ from .params import segment
 from .responses import page_policy
 
 if TYPE_CHECKING:
+    from ..models.domain import Entry
     from ..models.seasons import SeasonLink
     from ..models.views import BoardPage, BoardView
-    from ..service import LeaderboardService
+    from ..service import LeaderboardService, StandingsKeeper
+    from ..stores.base import StoredBoard
     from ..web import Invite
 
 #: A web page counting down to its board's opening or closing is rendered again this often.
@@ -104,11 +107,12 @@ class Standings:
                 self._rendering.pop(name, None)
         return copy
 
-    def renew(self, board_id: str, limits: Sequence[int]) -> None:
-        """Render the board's JSON pages of these sizes as it is now, from one read, and keep
-        them (what a push that changed the board does)."""
+    def renew(self, board_id: str, limits: Sequence[int],
+              front: tuple[StoredBoard, Sequence[Entry]] | None = None) -> None:
+        """Render the board's JSON pages of these sizes as it is now, from one read (or from
+        ``front``, the board and its first entries as read already), and keep them."""
         now = self.service.clock()
-        for limit, page in zip(limits, self.service.board_pages(board_id, limits), strict=True):
+        for limit, page in zip(limits, self.service.board_pages(board_id, limits, front), strict=True):
             self.pages.keep(Wanted(board_id, "json", limit), "", _json_copy(page, limit, now))
 
     def _render(self, wanted: Wanted, invite: Invite | None) -> Copy:
@@ -137,6 +141,25 @@ def _address(invite: Invite | None) -> str:
     if invite is None:
         return ""
     return invite.endpoint + (f" {invite.code}" if invite.code else "")
+
+
+def keeping_after_pushes(service: LeaderboardService,
+                         not_kept: Callable[[str, DomainError], None]) -> StandingsKeeper:
+    """What keeps a board's standings after a push improves it (the push function's): its JSON
+    pages of :data:`.kept.PUSHED_LIMITS` entries, rendered for the version the push made from
+    the push's own read of the board, and kept (in the table, for every container of the pull
+    function); ``not_kept`` is told of an error that kept them from being kept (their first
+    reader renders them instead)."""
+    from ..service import StandingsKeeper
+
+    def keep(stored: StoredBoard, entries: list[Entry]) -> None:
+        board_id = stored.board.board_id
+        try:
+            standings_of(service).renew(board_id, PUSHED_LIMITS, (stored, entries))
+        except DomainError as error:
+            not_kept(board_id, error)
+
+    return StandingsKeeper(max(PUSHED_LIMITS), keep)
 
 
 def renew_after_change(service: LeaderboardService, board: str) -> DomainError | None:

@@ -24,7 +24,7 @@ from importlib import import_module
 from typing import TYPE_CHECKING, Any, Concatenate, ParamSpec, TypeVar
 
 from ..board_ids import CUSTOM_PREFIX, board_for_track, default_board_id, is_default_board_id
-from .boards import BoardKeeper, Clock, racer_key, utc_now
+from .boards import BoardKeeper, Clock, StandingsKeeper, racer_key, utc_now
 
 if TYPE_CHECKING:
     from ..models.notices import EntryChange
@@ -48,7 +48,7 @@ R = TypeVar("R")
 
 __all__ = [
     "CUSTOM_PREFIX", "DEFAULT_PAGE", "DEFAULT_TOP", "LAPS_PAGE", "MAX_COMPARED", "MAX_TOP", "Clock",
-    "LeaderboardService", "board_for_track", "check_record_size", "default_board_id",
+    "LeaderboardService", "StandingsKeeper", "board_for_track", "check_record_size", "default_board_id",
     "evaluation_fingerprints", "is_default_board_id", "racer_key", "scored_write", "utc_now",
 ]
 
@@ -235,3 +235,9 @@ class LeaderboardService:
     def listen(self, listener: Callable[[EntryChange], None] | None) -> None:
         """Tell ``listener`` of every entry a push improves, as it happens (None: no one)."""
         self._keeper.listener = listener
+
+    def keep_standings_after_pushes(self, keeper: StandingsKeeper | None) -> None:
+        """After each push that improves a board, hand ``keeper`` the board and its first
+        ``keeper.top`` entries, read once: the push's receipt is made from the same read
+        (None: no one keeps them)."""
+        self._keeper.standings_keeper = keeper

@@ -7,7 +7,7 @@ import re
 import secrets
 from collections.abc import Callable
 from datetime import UTC, datetime
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 from drboard_assembler.aliases import alias_key
 from drboard_assembler.catalog import UnknownTrackError, default_catalog
@@ -30,6 +30,13 @@ if TYPE_CHECKING:
     from ..models.requests import BoardSpec
 
 Clock = Callable[[], datetime]
+
+
+class StandingsKeeper(NamedTuple):
+    """Who keeps a board's standings after a push improves it, and how many entries they need."""
+
+    top: int
+    keep: Callable[[StoredBoard, list[Entry]], None]
 
 _RACE_TITLE = {
     RaceType.TIME_TRIAL: "",
@@ -145,6 +152,9 @@ class BoardKeeper:
         self.clock = clock
         #: Told of every entry a push improves (`drboard serve`'s announcer), if anyone listens.
         self.listener: Callable[[EntryChange], None] | None = None
+        #: Handed the board and its first entries after a push improved it (how many: ``top``),
+        #: read once for the push's receipt: the push function keeps its standings from them.
+        self.standings_keeper: StandingsKeeper | None = None
 
     def require(self, board_id: str) -> StoredBoard:
         return live(board_id, self.store.get_board(board_id))
@@ -156,13 +166,12 @@ class BoardKeeper:
                               "rules and cannot be changed; create a named board for your race")
         return stored
 
-    def for_record(self, record: Record, board_id: str | None, now: datetime) -> StoredBoard:
-        """The board a run is pushed to (its track's default board unless named), made by the
-        run's push if it is the default board and does not exist yet."""
-        default_id = default_board_id(record.track, record.direction, record.race_type)
-        board_id = board_id or default_id
-        stored = self.store.get_board(board_id)
+    def for_record(self, record: Record, board_id: str, stored: StoredBoard | None,
+                   now: datetime) -> StoredBoard:
+        """The board a run is pushed to (``stored``, as read, under ``board_id``), made by the
+        run's push if it is the run's default board and does not exist yet."""
         if stored is None:
+            default_id = default_board_id(record.track, record.direction, record.race_type)
             if board_id != default_id:
                 raise BoardNotFound(f"no board {board_id!r}; this run belongs on {default_id!r}")
             stored = self.store.create_board(default_board(record, now))

@@ -37,9 +37,7 @@ class Managing:
             opens_at=spec.opens_at, closes_at=spec.closes_at, cooldown_s=spec.cooldown_s,
             max_submissions=spec.max_submissions, designs=spec.designs, created_at=now,
         )
-        if self.store.get_board(board.board_id) is not None:
-            raise BoardExists(f"there is already a board {board.board_id!r}")
-        stored = self.store.create_board(board)
+        stored = self.store.create_board(board)  # a board already there is given back as it is
         if stored.board != board:
             raise BoardExists(f"there is already a board {board.board_id!r}")
         self.keeper.audit(board.board_id, "create", caller, detail=board.title)

@@ -55,9 +55,10 @@ from ..stores.base import (
     LimitReached,
     LookalikeTaken,
     RecordArchive,
+    StoredBoard,
 )
 from ..views import design_of, entry_view, history_item
-from .boards import BoardKeeper, check_open, racer_key
+from .boards import BoardKeeper, check_open, default_board_id, racer_key
 from .copies import Verdict, judge, run_prints
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
@@ -85,23 +86,22 @@ class Pushing:
                               "`drboard join CODE` for a `drboard serve` board")
         now = self.keeper.clock()
         claim = self._new_claim(caller, record.racer, now)
-        found = self.keeper.for_record(record, board_id, now)
-        board_id = found.board.board_id
+        board_id = board_id or default_board_id(record.track, record.direction, record.race_type)
         key = racer_key(record.racer)
         prints = run_prints(record)
         skeleton = confusable_skeleton(record.racer)
         archived = False
-        for attempt in range(SETTINGS_ATTEMPTS):
-            # The board as just read for the first check; read again when it changed meanwhile.
-            stored_board = found if attempt == 0 else self.keeper.require(board_id)
+        for _ in range(SETTINGS_ATTEMPTS):
+            # The board, the event's bans, a duplicate and the racer's entry: one read (again
+            # when the board's settings changed meanwhile).
+            read = self.store.push_reads(board_id, key, record.submission_id)
+            stored_board = self.keeper.for_record(record, board_id, read.board, now)
             board = stored_board.board
-            bans, bans_version, stored = self.store.bans_and_submission(board_id, key,
-                                                                        record.submission_id)
-            check_not_banned(board, bans, record.racer, caller)
-            if stored is not None:
-                return self._duplicate_receipt(stored, record.racer)
+            check_not_banned(board, read.bans, record.racer, caller)
+            if read.submission is not None:
+                return self._duplicate_receipt(read.submission, read.entry, record.racer)
             check_open(board, now)
-            self._check_final(board_id, record.racer)
+            self._check_final(stored_board, record.racer)
             self._check_limits(board, key, record.racer, now)
             verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
             submission, entry = scored_write(record, board, now, verdict.flags)
@@ -113,10 +113,9 @@ class Pushing:
             limits = SubmissionLimits(now=now, cooldown_s=board.cooldown_s,
                                       max_submissions=board.max_submissions,
                                       settings_version=stored_board.settings_version,
-                                      bans_version=bans_version)
+                                      bans_version=read.bans_version, entry_seen=read.entry)
             audit = self.keeper.event(board_id, "push", caller, now, racer=record.racer,
                                       submission_id=record.submission_id, detail=record.model_name)
-            before = self.store.get_entry(board_id, key) if self.keeper.listener else None
             try:
                 outcome = self.store.record_submission(
                     submission, record, entry, limits, fingerprints=[p.fingerprint for p in prints],
@@ -140,11 +139,12 @@ class Pushing:
                             "checked; nothing was stored, try again")
         if outcome.duplicate:  # pushed twice at once: the other push stored it first
             stored = self.store.get_submission(board_id, key, record.submission_id)
-            return self._duplicate_receipt(stored or submission, record.racer)
+            return self._duplicate_receipt(stored or submission, self.store.get_entry(board_id, key),
+                                           record.racer)
         if outcome.improved and self.keeper.listener is not None:
             from ..models.notices import EntryChange  # only `drboard serve` listens
 
-            self.keeper.listener(EntryChange(board_id=board_id, before=before,
+            self.keeper.listener(EntryChange(board_id=board_id, before=read.entry,
                                              after=outcome.entry, at=now))
         self._tell_organiser(board_id, record, verdict, caller, now)
         try:
@@ -156,9 +156,13 @@ class Pushing:
                 message="stored; the board could not read its rank back just now "
                         "(`drboard status` shows it, and pushing the run again answers it)")
 
-    def _check_final(self, board_id: str, racer: str) -> None:
+    def _check_final(self, stored: StoredBoard, racer: str) -> None:
         """A season's final takes its qualifiers only (``NotQualified``). The seasons' rules are
-        loaded for a board that is a final: a push to any other board does without them."""
+        loaded for a board that is a final: a push to any other board does without them, and
+        one to a board no season ever took in does not look for its seasons."""
+        if not stored.maybe_in_a_season:
+            return
+        board_id = stored.board.board_id
         finals = [link for link in self.store.season_links(board_id) if link.final]
         if finals:
             from .seasons import check_entrant
@@ -197,8 +201,8 @@ class Pushing:
         except StoreError:
             pass
 
-    def _duplicate_receipt(self, stored: Submission, racer: str) -> PushReceipt:
-        best = self.store.get_entry(stored.board_id, stored.racer_key)
+    def _duplicate_receipt(self, stored: Submission, best: Entry | None, racer: str) -> PushReceipt:
+        """The receipt of a run already on the board, with the racer's ``best`` as read."""
         if best is None:
             raise NotAuthorized(f"{racer!r} was taken off {stored.board_id!r} by its organisers; "
                                 "this run stays off it")
@@ -206,8 +210,18 @@ class Pushing:
 
     def _receipt(self, submission: Submission, best: Entry, duplicate: bool,
                  improved: bool) -> PushReceipt:
-        rank = self.store.count_better(best.board_id, best.score_key) + 1
-        stored, top = self.store.front_page(best.board_id, 1)
+        """The receipt, from one read of the board and its first entries: the leader, and the
+        racer's rank when all who rank better are among them (else the store counts them).
+        After a push that improved the board, whoever keeps its standings is handed that read."""
+        keeper = self.keeper.standings_keeper if improved else None
+        size = keeper.top if keeper else 1
+        stored, top = self.store.front_page(best.board_id, size)
+        if keeper is not None and stored is not None:
+            keeper.keep(stored, top)
+        if len(top) < size or (top and top[-1].score_key >= best.score_key):
+            rank = 1 + sum(1 for entry in top if entry.score_key < best.score_key)
+        else:
+            rank = self.store.count_better(best.board_id, best.score_key) + 1
         return PushReceipt(
             status="duplicate" if duplicate else "created",
             board_id=best.board_id,

@@ -79,12 +79,16 @@ class Reading:
         entries = self.store.top(board_id, limit, after.rank_key)
         return self._page(stored, entries, limit, after, self.keeper.leader(board_id))
 
-    def board_pages(self, board_id: str, limits: Sequence[int]) -> list[BoardPage]:
-        """The board's top pages of these sizes, from one read of the largest."""
+    def board_pages(self, board_id: str, limits: Sequence[int],
+                    front: tuple[StoredBoard, Sequence[Entry]] | None = None) -> list[BoardPage]:
+        """The board's top pages of these sizes, from one read of the largest, or from
+        ``front``: the board and its first entries as read already (at least the largest)."""
         for limit in limits:
             check_limit(limit)
-        found, entries = self.store.front_page(board_id, max(limits))
-        stored = live(board_id, found)
+        if front is None:
+            found, read = self.store.front_page(board_id, max(limits))
+            front = live(board_id, found), read
+        stored, entries = front
         leader = entries[0] if entries else None
         return [self._page(stored, entries[:limit], limit, None, leader) for limit in limits]
 

@@ -40,6 +40,21 @@ class StoredBoard(NamedTuple):
     # Goes up with every change to the board's settings (its rules, window, limits, bans):
     # a push commits only if it is still the one it checked against.
     settings_version: int = 0
+    # False only where the store knows no season ever took the board in (as a round or its
+    # final): a push to it need not look for a season's final.
+    maybe_in_a_season: bool = True
+
+
+class PushReads(NamedTuple):
+    """What a push reads before it writes, in one read where the store can: the board (None:
+    no such board), the event's bans and their version, the racer's submission of the run
+    pushed (a duplicate; None: not yet on the board), and the racer's entry on the board."""
+
+    board: StoredBoard | None
+    bans: EventBans
+    bans_version: int
+    submission: Submission | None
+    entry: Entry | None
 
 
 class LimitReached(Exception):
@@ -337,10 +352,8 @@ class BoardStore(NoticeStore, Protocol):
     def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
         """One submission of the racer on the board."""
 
-    def bans_and_submission(self, board_id: str, racer_key: str,
-                            submission_id: str) -> tuple[EventBans, int, Submission | None]:
-        """The event's bans and their version, and one submission of the racer on the board (a
-        push's first checks), in one read where the store can."""
+    def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
+        """A push's first reads (see ``PushReads``), in one read where the store can."""
 
     def tally(self, board_id: str, racer_key: str) -> RacerTally:
         """How many submissions the racer made on the board, and when the last one was."""

@@ -54,6 +54,7 @@ from .base import (
     Indexed,
     LimitReached,
     LookalikeTaken,
+    PushReads,
     RankBuild,
     StoredBoard,
     StoredSubmissionPage,
@@ -475,10 +476,11 @@ class SqliteStore(SqliteSeasons):
             "AND racer_key = ?", (board_id, submission_id, racer_key)).fetchone()
         return Submission.model_validate_json(row[0]) if row else None
 
-    def bans_and_submission(self, board_id: str, racer_key: str,
-                            submission_id: str) -> tuple[EventBans, int, Submission | None]:
+    def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
         bans, version = self.event_bans()
-        return bans, version, self.get_submission(board_id, racer_key, submission_id)
+        return PushReads(self.get_board(board_id), bans, version,
+                         self.get_submission(board_id, racer_key, submission_id),
+                         self.get_entry(board_id, racer_key))
 
     def tally(self, board_id: str, racer_key: str) -> RacerTally:
         return self._tally(self._db, board_id, racer_key)

@@ -87,6 +87,9 @@ RANK_INDEX = "by_rank"
 RACER_INDEX = "by_racer"
 BOARDS_INDEX = "boards"
 COUNT_PREFIX = "c:"
+#: Set on a board item when the board is created, and removed for good the first time a season
+#: takes the board in: while it is there, a push need not look for the board's seasons.
+NEVER_IN_A_SEASON = "never_in_a_season"
 
 
 def entry_sk(racer_key: str) -> str:
@@ -221,7 +224,8 @@ def fingerprint_item(board_id: str, fingerprint: str, racer_key: str) -> Item:
 def stored_board(item: Item) -> StoredBoard:
     return StoredBoard(Board.model_validate_json(item["data"]["S"]), int(item["participants"]["N"]),
                        int(item.get("board_version", {"N": "0"})["N"]),
-                       int(item.get("settings_version", {"N": "0"})["N"]))
+                       int(item.get("settings_version", {"N": "0"})["N"]),
+                       maybe_in_a_season=NEVER_IN_A_SEASON not in item)
 
 
 def entry_of(item: Item) -> Entry:

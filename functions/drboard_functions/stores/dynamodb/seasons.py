@@ -24,7 +24,7 @@ from botocore.exceptions import ClientError
 
 from ..aws_errors import code_of, translating
 from ..base import SeasonConflict, SeasonSlice, StoredBoard, page_token, read_page_token
-from .codecs import BOARD_SK, BOARDS_INDEX, key, stored_board, text
+from .codecs import BOARD_SK, BOARDS_INDEX, NEVER_IN_A_SEASON, key, stored_board, text
 from .transaction import Slots
 
 if TYPE_CHECKING:  # the models are imported where an item is read: a push to a board in no
@@ -113,7 +113,8 @@ class DynamoDbSeasons:
                     "data": text(link.model_dump_json())}}})
             slots.add("board", {"Update": {
                 "TableName": self.table, "Key": key(board_id, BOARD_SK),
-                "UpdateExpression": "ADD board_version :one", "ConditionExpression": "attribute_exists(sk)",
+                "UpdateExpression": f"ADD board_version :one REMOVE {NEVER_IN_A_SEASON}",
+                "ConditionExpression": "attribute_exists(sk)",
                 "ExpressionAttributeValues": {":one": {"N": "1"}}}})
         for board_id in forget:
             slots.add("results", {"Delete": {"TableName": self.table, "Key": key(

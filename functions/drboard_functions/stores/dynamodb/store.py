@@ -45,6 +45,7 @@ from ..base import (
     ImportBatch,
     ImportWritten,
     Indexed,
+    PushReads,
     RankBuild,
     StoredBoard,
     StoredSubmissionPage,
@@ -64,6 +65,7 @@ from .codecs import (
     BOARDS_INDEX,
     EVENT_PARTITION,
     FIRST_ENTRY,
+    NEVER_IN_A_SEASON,
     NOTICE_PARTITION,
     RACER_INDEX,
     RANK_INDEX,
@@ -148,7 +150,8 @@ class DynamoDbStore(DynamoDbSeasons):
         return self.pages.version(board_id)
 
     def create_board(self, board: Board) -> StoredBoard:
-        item = board_item(board) | {"rank_generation": text(FIRST_GENERATION)}
+        item = board_item(board) | {"rank_generation": text(FIRST_GENERATION),
+                                    NEVER_IN_A_SEASON: {"BOOL": True}}
         try:
             self.client.put_item(TableName=self.table, Item=item,
                                  ConditionExpression="attribute_not_exists(sk)")
@@ -364,17 +367,24 @@ class DynamoDbStore(DynamoDbSeasons):
     def event_bans(self) -> tuple[EventBans, int]:
         return _bans(self.get_item(EVENT_PARTITION, BANS_SK))
 
-    def bans_and_submission(self, board_id: str, racer_key: str,
-                            submission_id: str) -> tuple[EventBans, int, Submission | None]:
-        wanted = [key(EVENT_PARTITION, BANS_SK), key(board_id, submission_sk(racer_key, submission_id))]
-        answer = self.client.batch_get_item(RequestItems={self.table: {"Keys": wanted,
-                                                                       "ConsistentRead": True}})
+    def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
+        wanted = {BOARD_SK: key(board_id, BOARD_SK), BANS_SK: key(EVENT_PARTITION, BANS_SK),
+                  "submission": key(board_id, submission_sk(racer_key, submission_id)),
+                  "entry": key(board_id, entry_sk(racer_key))}
+        answer = self.client.batch_get_item(RequestItems={self.table: {
+            "Keys": list(wanted.values()), "ConsistentRead": True}})
         if answer.get("UnprocessedKeys"):  # throttled: one read at a time
-            return (*self.event_bans(), self.get_submission(board_id, racer_key, submission_id))
-        items = {item["board"]["S"]: item for item in answer.get("Responses", {}).get(self.table, [])}
-        bans, version = _bans(items.get(EVENT_PARTITION))
-        submission = items.get(board_id)
-        return bans, version, submission_of(submission) if submission else None
+            return PushReads(self.get_board(board_id), *self.event_bans(),
+                             self.get_submission(board_id, racer_key, submission_id),
+                             self.get_entry(board_id, racer_key))
+        found = {item["sk"]["S"]: item for item in answer.get("Responses", {}).get(self.table, [])}
+        board = found.get(BOARD_SK)
+        if board is not None:
+            self.ranks.note(board_id, board)
+        submission, entry = (found.get(wanted[name]["sk"]["S"]) for name in ("submission", "entry"))
+        return PushReads(stored_board(board) if board else None, *_bans(found.get(BANS_SK)),
+                         submission_of(submission) if submission else None,
+                         entry_of(entry) if entry else None)
 
     def save_event_bans(self, bans: EventBans, version: int) -> int:
         condition, values = bans_condition(version)
@@ -669,7 +679,8 @@ class DynamoDbStore(DynamoDbSeasons):
             "TableName": self.table, "IndexName": RANK_INDEX, "ConsistentRead": True,
             "KeyConditionExpression": "board = :board",
             "ExpressionAttributeValues": {":board": text(board_id)},
-            "ProjectionExpression": "sk, #data, participants, board_version, settings_version",
+            "ProjectionExpression": f"sk, #data, participants, board_version, settings_version, "
+                                    f"{NEVER_IN_A_SEASON}",
             "ExpressionAttributeNames": {"#data": "data"},
         }
         items = self._query(request, limit=limit + 1)

@@ -146,7 +146,10 @@ class PushTransaction:
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 backoff(attempt)
-            current = self.store.get_entry(board_id, racer)
+            # A push read the entry already: its first attempt writes against that (the write
+            # is conditioned on it); a later attempt reads it again.
+            current = (self.limits.entry_seen if attempt == 0 and self.limits is not None
+                       else self.store.get_entry(board_id, racer))
             slots = self._slots(current, state)
             try:
                 self._commit(slots)
