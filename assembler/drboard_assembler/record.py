@@ -478,12 +478,6 @@ def content_hash(record: Record) -> str:
     return hashlib.sha256(_CANONICAL.encode(content).encode("utf-8")).hexdigest()
 
 
-def json_and_hash(record: Record) -> tuple[str, str]:
-    """The record's JSON as ``model_dump_json`` writes it (what a board stores of a record),
-    and its ``content_hash`` (what the board checks it against)."""
-    return record.model_dump_json(), content_hash(record)
-
-
 _NOT_CONTENT = {"submission_id", "assembler_version"}
 
 

@@ -55,9 +55,9 @@ if TYPE_CHECKING:
     from drboard_functions.service import LeaderboardService
     from drboard_functions.service.loading import BulkImport, PreparedSubmission
 
-#: Prepares an exported submission (its record and its first time) for the board imported into
-#: (``loading.prepare_submission``).
-Prepare = Callable[[Record, datetime], "PreparedSubmission"]
+#: Prepares an exported submission (its record, its first time, and the record's JSON as the line
+#: holds it, or None) for the board imported into (``loading.prepare_submission``).
+Prepare = Callable[[Record, datetime, str | None], "PreparedSubmission"]
 #: Archives a prepared submission's record, where the board archives (``BulkImport.keep``).
 Keep = Callable[[Record], None]
 
@@ -80,6 +80,11 @@ STDIN = "-"
 WRITE_BUFFER_BYTES = 1 << 20
 
 _LINE = TypeAdapter[ExportLine](ExportLine)
+_SUBMISSION = TypeAdapter[Submission](Submission)
+_RECORD = TypeAdapter[Record](Record)
+#: A submission line as an export writes it: ``{"kind":"submission","submission":{…},"record":{…}}``.
+_SUBMISSION_LINE = b'{"kind":"submission","submission":'
+_RECORD_MEMBER = b',"record":'
 
 
 class BadExportFile(Exception):
@@ -443,7 +448,7 @@ def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, b
         number += 1
         if len(raw) > MAX_LINE_BYTES:
             raise BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
-        if raw.strip():
+        if not raw.isspace():  # (stripping would copy every line)
             yield number, raw
 
 
@@ -454,24 +459,49 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tu
     entries = 0
     for number, raw in chunk:
         where = f"{name}:{number}"
-        line = _parsed(where, raw, IMPORT_CHECKS)
-        if isinstance(line, ExportedBoard):
-            raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
-        if isinstance(line, ExportedEntry):
-            entries += 1
-            continue
-        prepared.append(_prepared_line(where, line.submission, line.record, exported, prepare))
+        read: tuple[Submission, Record, str | None] | None = _submission_line(raw)
+        if read is None:
+            line = _parsed(where, raw, IMPORT_CHECKS)
+            if isinstance(line, ExportedBoard):
+                raise BadExportFile(f"{where}: kind: a second board line (an export holds one board)")
+            if isinstance(line, ExportedEntry):
+                entries += 1
+                continue
+            read = line.submission, line.record, None
+        submission, record, record_json = read
+        prepared.append(_prepared_line(where, submission, record, record_json, exported, prepare))
         if keep is not None:
-            keep(line.record)
+            keep(record)
     return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
 
 
-def _prepared_line(where: str, submission: Submission, record: Record, exported: Board,
-                   prepare: Prepare) -> PreparedSubmission:
+def _submission_line(raw: bytes) -> tuple[Submission, Record, str] | None:
+    """A submission line in the shape an export writes it, read as its two parts: its submission,
+    and its record with the record's JSON as the line holds it (what the board stores; nothing is
+    written out again). None for any other line, or one that does not read so (read whole then,
+    which names its first problem)."""
+    if not raw.startswith(_SUBMISSION_LINE):
+        return None
+    line = raw.rstrip()
+    split = line.rfind(_RECORD_MEMBER)
+    if split < 0 or not line.endswith(b"}"):
+        return None
+    # Both parts read as JSON values only where the split is the line's own: a "record" member
+    # inside the record leaves the first part holding the record's start after its submission.
+    record_json = line[split + len(_RECORD_MEMBER):-1]
+    try:
+        return (_SUBMISSION.validate_json(line[len(_SUBMISSION_LINE):split]),
+                _RECORD.validate_json(record_json, context=IMPORT_CHECKS), record_json.decode())
+    except ValidationError:
+        return None
+
+
+def _prepared_line(where: str, submission: Submission, record: Record, record_json: str | None,
+                   exported: Board, prepare: Prepare) -> PreparedSubmission:
     """Check a submission line for the exported board, and prepare it (BadExportFile)."""
     _check_submission(where, submission, record, exported)
     try:
-        return prepare(record, submission.submitted_at)
+        return prepare(record, submission.submitted_at, record_json)
     except DomainError as error:
         raise BadExportFile(f"{where}: {_refusal(error)}") from None
 

@@ -32,7 +32,8 @@ from datetime import datetime
 from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
-from drboard_assembler.record import Record, json_and_hash
+from drboard_assembler.limits import MAX_RECORD_BYTES
+from drboard_assembler.record import Record, content_hash
 
 from .. import ranking
 from ..errors import InvalidSubmission, StoreBusy
@@ -72,14 +73,18 @@ class ImportTally(NamedTuple):
     duplicates: int
 
 
-def prepare_submission(board: Board, record: Record, submitted_at: datetime) -> PreparedSubmission:
+def prepare_submission(board: Board, record: Record, submitted_at: datetime,
+                       record_json: str | None = None) -> PreparedSubmission:
     """Check an exported submission (its record, first submitted at ``submitted_at``) for
     ``board`` (BoardMismatch, SubmissionTooLarge, InvalidSubmission when its id is not its
-    content's hash) and prepare what importing it writes: reads and writes nothing."""
+    content's hash) and prepare what importing it writes: reads and writes nothing. The board
+    stores the record as ``record_json``, the JSON it was read from, when given and within the
+    record's bound (else as the record writes itself out)."""
     check_belongs(record, board)
-    stored, digest = json_and_hash(record)
-    check_record_json_size(stored)
-    if digest != record.submission_id:
+    if record_json is None or len(record_json) > MAX_RECORD_BYTES:
+        record_json = record.model_dump_json()
+    stored = check_record_json_size(record_json)
+    if content_hash(record) != record.submission_id:
         raise InvalidSubmission("the record's submission_id does not match its content",
                                 detail=[{"loc": "record.submission_id", "type": "value_error",
                                          "msg": "does not match the record's content"}])
