@@ -664,7 +664,8 @@ async def _request_body(scope: Scope, receive: Receive) -> bytes:
         raise _BodyTooLarge
     body = bytearray()
     while True:
-        message = await asyncio.wait_for(receive(), IDLE_CONNECTION_S)
+        async with asyncio.timeout(IDLE_CONNECTION_S):
+            message = await receive()
         body += message.get("body", b"")
         if len(body) > MAX_BODY_BYTES:
             raise _BodyTooLarge
