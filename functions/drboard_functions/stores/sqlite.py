@@ -292,18 +292,6 @@ class SqliteStore(SqliteSeasons):
             self._db.execute("COMMIT")
 
     @contextmanager
-    def _batch_write(self) -> Iterator[sqlite3.Connection]:
-        """A batch of an import: inside ``held_writes``, straight into the held transaction (a
-        batch that fails fails the whole import, which keeps nothing: no savepoint to roll back
-        to, whose journal would copy every page the batch changes); else a transaction of its
-        own."""
-        if getattr(self._local, "held", False):
-            yield self._db
-            return
-        with self._write() as db:
-            yield db
-
-    @contextmanager
     def _savepoint(self) -> Iterator[sqlite3.Connection]:
         db = self._db
         db.execute("SAVEPOINT write")
@@ -807,7 +795,7 @@ class SqliteStore(SqliteSeasons):
         return held, lookalikes
 
     def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
-        with self._bigger_cache(), self._batch_write() as db:
+        with self._bigger_cache(), self._write() as db:
             if db.execute("SELECT 1 FROM boards WHERE board_id = ?", (board_id,)).fetchone() is None:
                 raise KeyError(board_id)
             rows = new_rows(batch.rows, self._present(db, board_id,
