@@ -223,14 +223,13 @@ class BoardServer:
         # server's loop, a kept page costs no hop to a worker thread. (A DynamoDB table's is a
         # network call: it is read in the pool.)
         self.embedded = service.store if isinstance(service.store, SqliteStore) else None
-        self.versions_on_loop = self.embedded is not None
         self.pool = ThreadPoolExecutor(RESOLVER_THREADS, thread_name_prefix="drboard-serve")
         # The embedded board takes one write at a time: a push is answered on the loop while the
         # file is free (``push_here``), else it waits its turn in one thread of its own, rather
         # than in SQLite's busy handler (which sleeps between its tries) in threads that contend
         # for the interpreter meanwhile. A DynamoDB table takes pushes at once, in the pool.
         self.writes = (ThreadPoolExecutor(1, thread_name_prefix="drboard-serve-push")
-                       if self.versions_on_loop else self.pool)
+                       if self.embedded is not None else self.pool)
         self.open_streams = 0
         self.socket = _listening_socket(address)
         self.server_address: tuple[str, int] = self.socket.getsockname()[:2]
@@ -416,7 +415,7 @@ class BoardServer:
 
     async def _answer(self, scope: Scope, path: str, receive: Receive, send: Send) -> int:
         if scope["method"] == "GET":
-            if self.versions_on_loop:
+            if self.embedded is not None:
                 kept = self.kept_answer(scope, path)
             else:
                 kept = await asyncio.get_running_loop().run_in_executor(

@@ -38,6 +38,7 @@ class StandingsKeeper(NamedTuple):
     top: int
     keep: Callable[[StoredBoard, list[Entry]], None]
 
+
 _RACE_TITLE = {
     RaceType.TIME_TRIAL: "",
     RaceType.OBJECT_AVOIDANCE: ", object avoidance",

@@ -368,20 +368,19 @@ class DynamoDbStore(DynamoDbSeasons):
         return _bans(self.get_item(EVENT_PARTITION, BANS_SK))
 
     def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
-        wanted = {BOARD_SK: key(board_id, BOARD_SK), BANS_SK: key(EVENT_PARTITION, BANS_SK),
-                  "submission": key(board_id, submission_sk(racer_key, submission_id)),
-                  "entry": key(board_id, entry_sk(racer_key))}
-        answer = self.client.batch_get_item(RequestItems={self.table: {
-            "Keys": list(wanted.values()), "ConsistentRead": True}})
+        submission_key, entry_key = submission_sk(racer_key, submission_id), entry_sk(racer_key)
+        wanted = [key(board_id, BOARD_SK), key(EVENT_PARTITION, BANS_SK),
+                  key(board_id, submission_key), key(board_id, entry_key)]
+        answer = self.client.batch_get_item(RequestItems={self.table: {"Keys": wanted,
+                                                                       "ConsistentRead": True}})
         if answer.get("UnprocessedKeys"):  # throttled: one read at a time
             return PushReads(self.get_board(board_id), *self.event_bans(),
                              self.get_submission(board_id, racer_key, submission_id),
                              self.get_entry(board_id, racer_key))
         found = {item["sk"]["S"]: item for item in answer.get("Responses", {}).get(self.table, [])}
-        board = found.get(BOARD_SK)
+        board, submission, entry = (found.get(sk) for sk in (BOARD_SK, submission_key, entry_key))
         if board is not None:
             self.ranks.note(board_id, board)
-        submission, entry = (found.get(wanted[name]["sk"]["S"]) for name in ("submission", "entry"))
         return PushReads(stored_board(board) if board else None, *_bans(found.get(BANS_SK)),
                          submission_of(submission) if submission else None,
                          entry_of(entry) if entry else None)
