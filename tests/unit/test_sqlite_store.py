@@ -197,3 +197,24 @@ def test_a_board_file_from_before_the_rank_counts_gets_them_on_opening(tmp_path:
         assert store.count_better(TRACK, "1:10000") == 7
     finally:
         store.close()
+
+
+def test_a_racer_who_improves_leaves_no_empty_rank_counts_behind(tmp_path: Path) -> None:
+    """The counts an improved entry leaves are taken down, and those that reach zero go: the
+    file keeps only counts that count someone."""
+    path = tmp_path / "board.db"
+    store = SqliteStore(path)
+    try:
+        submit(store, make_record("Ada", [(30_000, 100)]), at(1))
+        submit(store, make_record("Bob", [(12_000, 100)]), at(2))
+        submit(store, make_record("Ada", [(9_000, 100)]), at(3))  # from last place to first
+        ada, bob = store.get_entry(TRACK, "ada"), store.get_entry(TRACK, "bob")
+        assert ada is not None and bob is not None
+        assert store.count_better(TRACK, ada.score_key) == 0
+        assert store.count_better(TRACK, bob.score_key) == 1
+        assert store.count_better(TRACK, "1:10000") == 2
+    finally:
+        store.close()
+    with sqlite3.connect(path) as db:
+        assert db.execute("SELECT COUNT(*) FROM rank_counts WHERE entries = 0").fetchone()[0] == 0
+        assert db.execute("SELECT SUM(entries) FROM rank_counts WHERE node = ''").fetchone()[0] == 2

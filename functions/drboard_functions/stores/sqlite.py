@@ -433,14 +433,15 @@ class SqliteStore(SqliteSeasons):
     @staticmethod
     def _hold_skeleton(db: sqlite3.Connection, board_id: str, skeleton: str, racer_key: str,
                        strict: bool) -> str | None:
-        row = db.execute("SELECT racer_key FROM skeletons WHERE board_id = ? AND skeleton = ?",
-                         (board_id, skeleton)).fetchone()
-        if row is not None and row[0] != racer_key:
-            if strict:
-                raise LookalikeTaken(row[0])
-            return str(row[0])
-        db.execute("INSERT OR IGNORE INTO skeletons VALUES (?, ?, ?)", (board_id, skeleton, racer_key))
-        return None
+        if db.execute("INSERT OR IGNORE INTO skeletons VALUES (?, ?, ?)",
+                      (board_id, skeleton, racer_key)).rowcount:
+            return None  # it was free: now held
+        holder = _holder(db, "skeletons", "skeleton", board_id, skeleton)
+        if holder == racer_key:
+            return None
+        if strict:
+            raise LookalikeTaken(holder)
+        return holder
 
     @staticmethod
     def _index_runs(db: sqlite3.Connection, submission: Submission, runs: Sequence[RunPrint]) -> None:
@@ -458,12 +459,12 @@ class SqliteStore(SqliteSeasons):
     def _claim_fingerprints(db: sqlite3.Connection, board_id: str, racer_key: str,
                             fingerprints: Sequence[str]) -> None:
         for fingerprint in fingerprints:
-            row = db.execute("SELECT racer_key FROM fingerprints WHERE board_id = ? AND fingerprint = ?",
-                             (board_id, fingerprint)).fetchone()
-            if row is not None and row[0] != racer_key:
-                raise FingerprintTaken(row[0])
-            db.execute("INSERT OR IGNORE INTO fingerprints VALUES (?, ?, ?)",
-                       (board_id, fingerprint, racer_key))
+            if db.execute("INSERT OR IGNORE INTO fingerprints VALUES (?, ?, ?)",
+                          (board_id, fingerprint, racer_key)).rowcount:
+                continue  # it was free: now claimed
+            holder = _holder(db, "fingerprints", "fingerprint", board_id, fingerprint)
+            if holder != racer_key:
+                raise FingerprintTaken(holder)
 
     @staticmethod
     def _has_submission(db: sqlite3.Connection, board_id: str, submission_id: str) -> bool:
@@ -566,8 +567,11 @@ class SqliteStore(SqliteSeasons):
             "DO UPDATE SET entries = entries + excluded.entries",
             [(board_id, node, child, change) for node, children in moves.items()
              for child, change in children.items()])
-        db.executemany("DELETE FROM rank_counts WHERE board_id = ? AND node = ? AND entries = 0",
-                       [(board_id, node) for node in moves])
+        # Only a count that went down can have reached zero.
+        db.executemany("DELETE FROM rank_counts WHERE board_id = ? AND node = ? AND child = ? "
+                       "AND entries = 0",
+                       [(board_id, node, child) for node, children in moves.items()
+                        for child, change in children.items() if change < 0])
 
     def history(self, racer_key: str, board_id: str | None = None) -> list[Submission]:
         if board_id is None:
@@ -966,6 +970,13 @@ def _busy_as_store_busy(path: str, attempt: FirstTry | None = None) -> Iterator[
         raise StoreBusy(f"the board {path} is busy with another writer (waited "
                         f"{BUSY_TIMEOUT_S:g} s); nothing was stored, try again",
                         BUSY_RETRY_AFTER_S) from error
+
+
+def _holder(db: sqlite3.Connection, table: str, column: str, board_id: str, key: str) -> str:
+    """The racer who holds ``key`` on the board, in ``table`` (fingerprints or skeletons)."""
+    row = db.execute(f"SELECT racer_key FROM {table} WHERE board_id = ? AND {column} = ?",
+                     (board_id, key)).fetchone()
+    return str(row[0])
 
 
 def _check_limits(tally: RacerTally, limits: SubmissionLimits) -> None:
