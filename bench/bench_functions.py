@@ -300,18 +300,21 @@ import boto3
 
 
 #: Run in a function's own process: answer its first request as FIRST_REQUEST_CODE does, and save
-#: what it wrote (every DynamoDB and S3 write call, with its parameters) and, for a card, the SVG
-#: it drew its PNG from: what the function's floor then writes or draws again.
+#: what it wrote (every DynamoDB and S3 write call, with its parameters), every call it made
+#: (its reads too, in order) and, for a card, the SVG it drew its PNG from: what the function's
+#: floors then write, make or draw again.
 CAPTURE_CODE = """
 import base64, json, sys
 import botocore.client
 WRITES = {"PutItem", "UpdateItem", "DeleteItem", "TransactWriteItems", "BatchWriteItem", "PutObject"}
-calls, drawn = [], []
+calls, made, drawn = [], [], []
 call = botocore.client.BaseClient._make_api_call
 def recorded(client, operation, params):
-    if operation in WRITES:  # a transaction's token is its own: the floor's get theirs
-        kept = {name: value for name, value in params.items() if name != "ClientRequestToken"}
-        calls.append([client.meta.service_model.service_name, operation, kept])
+    # a transaction's token is its own: the floor's get theirs
+    kept = {name: value for name, value in params.items() if name != "ClientRequestToken"}
+    made.append([client.meta.service_model.service_name, operation, kept])
+    if operation in WRITES:
+        calls.append(made[-1])
     return call(client, operation, params)
 botocore.client.BaseClient._make_api_call = recorded
 saved = sys.argv.pop()
@@ -329,7 +332,8 @@ def encoded(value):
         return {"__bytes__": base64.b64encode(value).decode()}
     raise TypeError(type(value))
 with open(saved, "w") as file:
-    json.dump({"calls": calls, "svg": drawn[0] if drawn else None}, file, default=encoded)
+    json.dump({"calls": calls, "made": made, "svg": drawn[0] if drawn else None}, file,
+              default=encoded)
 """
 
 
@@ -357,7 +361,8 @@ def client(service):
     return clients.get(service) or clients.setdefault(service, boto3.client(service))
 NAMES = {"PutItem": "put_item", "UpdateItem": "update_item", "DeleteItem": "delete_item",
          "TransactWriteItems": "transact_write_items", "BatchWriteItem": "batch_write_item",
-         "PutObject": "put_object"}
+         "PutObject": "put_object", "GetItem": "get_item", "BatchGetItem": "batch_get_item",
+         "Query": "query"}
 for service, operation, params in saved["calls"]:
     getattr(client(service), NAMES[operation])(**params)
 page = client("dynamodb").query(TableName=table, IndexName="by_rank", ConsistentRead=True,
@@ -370,6 +375,64 @@ if saved["svg"]:
 answered, cpu_end = time.perf_counter(), time.process_time()
 print(json.dumps({"first_ms": (answered - start) * 1000, "cpu_ms": (cpu_end - cpu_start) * 1000,
                   "items": len(page["Items"])}))
+"""
+
+#: A writing function's floor inside the stack every function is built on: a Powertools resolver
+#: with validation (its one route takes the event's body as the function's schema), its logger
+#: and metrics around the handler, as the functions wrap theirs; the route makes every call the
+#: function made, reads and writes, in order (saved by CAPTURE_CODE). Not a floor (the
+#: function's own reads are its rules, not the output's): what it leaves of the 1.3 x target is
+#: the room for drboard's own code.
+STACKED_OUTPUT_CODE = """
+import base64, inspect, json, sys, time
+start, cpu_start = time.perf_counter(), time.process_time()
+from typing import Annotated
+from aws_lambda_powertools import Logger, Metrics
+from aws_lambda_powertools.event_handler import APIGatewayHttpResolver
+from aws_lambda_powertools.event_handler.openapi.params import Body
+from aws_lambda_powertools.logging import correlation_paths
+import boto3
+table, saved_file, captured_table, schema, event_file = sys.argv[1:6]
+module, name = schema.rsplit(".", 1)
+model = getattr(__import__(module, fromlist=[name]), name)
+with open(saved_file) as file:
+    saved = json.loads(file.read().replace(json.dumps(captured_table), json.dumps(table)),
+                       object_hook=lambda o: base64.b64decode(o["__bytes__"]) if "__bytes__" in o else o)
+with open(event_file) as file:
+    event = json.load(file)
+clients = {}
+def client(service):
+    return clients.get(service) or clients.setdefault(service, boto3.client(service))
+NAMES = {"PutItem": "put_item", "UpdateItem": "update_item", "DeleteItem": "delete_item",
+         "TransactWriteItems": "transact_write_items", "BatchWriteItem": "batch_write_item",
+         "PutObject": "put_object", "GetItem": "get_item", "BatchGetItem": "batch_get_item",
+         "Query": "query"}
+logger, metrics = Logger(), Metrics()
+app = APIGatewayHttpResolver(enable_validation=True)
+def answer(**_):
+    for service, operation, params in saved["made"]:
+        getattr(client(service), NAMES[operation])(**params)
+    return {}
+keyword = inspect.Parameter.KEYWORD_ONLY
+answer.__signature__ = inspect.Signature(
+    [inspect.Parameter(path, keyword, annotation=str) for path in event.get("pathParameters") or {}]
+    + [inspect.Parameter("body", keyword, annotation=Annotated[model, Body()])])
+method, route = event["routeKey"].split(" ", 1)
+app.route(route.replace("{", "<").replace("}", ">"), method=method)(answer)
+@logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
+@metrics.log_metrics(capture_cold_start_metric=True)
+def handler(event, context):
+    return app.resolve(event, context)
+class Context:
+    function_name, function_version, memory_limit_in_mb = "floor", "$LATEST", 512
+    invoked_function_arn = "arn:aws:lambda:us-east-1:123456789012:function:floor"
+    aws_request_id, log_group_name, log_stream_name = "floor", "floor", "floor"
+    def get_remaining_time_in_millis(self):
+        return 10_000
+status = handler(event, Context())["statusCode"]
+answered, cpu_end = time.perf_counter(), time.process_time()
+print(json.dumps({"first_ms": (answered - start) * 1000, "cpu_ms": (cpu_end - cpu_start) * 1000,
+                  "status": status}))
 """
 
 #: What each function's own floor does.
@@ -433,6 +496,19 @@ def same_output_floor(sandbox: Sandbox, kind: str, table: str, saved: Path, capt
     return Timing(result["first_ms"], result["cpu_ms"])
 
 
+def stacked_output_floor(sandbox: Sandbox, kind: str, table: str, saved: Path,
+                         captured_table: str) -> Timing:
+    """STACKED_OUTPUT_CODE for ``kind`` on ``table``, in the same state as the table the function
+    answered on."""
+    done = sandbox.run(kind, table, "-c", STACKED_OUTPUT_CODE, table, str(saved), captured_table,
+                       BODY_SCHEMA[kind], str(ROOT / "events" / FIRST_REQUEST[kind][0]))
+    result = json.loads(done.stdout.splitlines()[-1])
+    if result["status"] >= 300:
+        sys.exit(f"bench_functions: the {kind} function's calls in the stack answered "
+                 f"{result['status']}:\n{done.stdout[-2000:]}")
+    return Timing(result["first_ms"], result["cpu_ms"])
+
+
 class StubS3(BaseHTTPRequestHandler):
     """Answers the push function's PutObject (the record's archive) as S3 does, storing nothing."""
 
@@ -469,8 +545,10 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox,
     order = sorted(HANDLERS.values(), key=lambda k: list(FIRST_REQUEST).index(k) if k in FIRST_REQUEST
                    else len(FIRST_REQUEST))
     own_floors = [kind for kind in order if kind in BODY_SCHEMA]
+    stacked = [kind for kind in own_floors if BODY_SCHEMA[kind]]
     floors: dict[str, list[Timing]] = {"floor": [], "powertools": [], "stack": [],
-                                       **{kind: [] for kind in own_floors}}
+                                       **{kind: [] for kind in own_floors},
+                                       **{f"{kind} stacked": [] for kind in stacked}}
     samples: Samples = {kind: {"import": [], "first": [], "cpu": [], "importtime": [], "compiled": []}
                         for kind in HANDLERS.values()}
     try:
@@ -496,6 +574,11 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox,
                 target = create_board_table(client, f"cold-{round_}-{kind}") if fresh else table
                 own[kind] = same_output_floor(sandbox, kind, target, outputs[kind], captured)
                 if fresh:
+                    client.delete_table(TableName=target)
+                if kind in stacked:
+                    target = create_board_table(client, f"cold-{round_}-{kind}-stacked")
+                    own[f"{kind} stacked"] = stacked_output_floor(sandbox, kind, target,
+                                                                  outputs[kind], captured)
                     client.delete_table(TableName=target)
             if round_:
                 floors["floor"].append(floor_ms)
@@ -646,6 +729,18 @@ def main(argv: list[str] | None = None) -> int:
         report.add("  the same in CPU time", paired(samples["cpu"], own, cpu=True), "x",
                    note="the function's process CPU time over its floor's, median of the rounds' "
                         "ratios (no target: it agrees with the wall time when the machine is quiet)")
+        if f"{kind} stacked" in floors:
+            stacked = floors[f"{kind} stacked"]
+            stacked_p50 = p50_p95([t.ms for t in stacked])[0]
+            report.add(f"  its floor in the functions' stack, with every call the {kind} function "
+                       "makes / its floor", paired([t.ms for t in stacked], own), "x",
+                       note=f"no target: {stacked_p50:.0f} ms p50; its floor inside a Powertools "
+                            "resolver with validation, logger and metrics, making the function's "
+                            "reads as well as its writes: what the libraries and the function's "
+                            "own reads take of the target")
+            report.add(f"  the {kind} function / that", paired(samples["first"], stacked), "x",
+                       note="no target: drboard's own code (its modules, models and checks) "
+                            "over the libraries and calls it cannot do without")
         compiled = sorted({name for names in samples["compiled"] for name in names})
         report.add(f"modules the {kind} function's cold start compiles", len(compiled), "",
                    ok=not compiled, target="0",
