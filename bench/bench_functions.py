@@ -337,6 +337,26 @@ with open(saved, "w") as file:
 """
 
 
+#: Part of the floors that make a function's calls again: the calls CAPTURE_CODE saved in
+#: ``saved_file`` (with ``table`` for the table they were made on), and ``replay``, which makes
+#: them with one client per service.
+REPLAY_CODE = """
+with open(saved_file) as file:
+    saved = json.loads(file.read().replace(json.dumps(captured_table), json.dumps(table)),
+                       object_hook=lambda o: base64.b64decode(o["__bytes__"]) if "__bytes__" in o else o)
+clients = {}
+def client(service):
+    return clients.get(service) or clients.setdefault(service, boto3.client(service))
+NAMES = {"PutItem": "put_item", "UpdateItem": "update_item", "DeleteItem": "delete_item",
+         "TransactWriteItems": "transact_write_items", "BatchWriteItem": "batch_write_item",
+         "PutObject": "put_object", "GetItem": "get_item", "BatchGetItem": "batch_get_item",
+         "Query": "query"}
+def replay(calls):
+    for service, operation, params in calls:
+        getattr(client(service), NAMES[operation])(**params)
+"""
+
+
 #: The floor of a function that writes (push, admin), or draws (card): the fastest honest program
 #: for the same output, run as the functions are. It validates the event's body against the
 #: route's schema with pydantic (any board storing what it is sent must: the standards' library,
@@ -353,18 +373,8 @@ if schema:
     model = getattr(__import__(module, fromlist=[name]), name)
     with open(event_file) as file:
         model.model_validate_json(json.load(file)["body"])
-with open(saved_file) as file:
-    saved = json.loads(file.read().replace(json.dumps(captured_table), json.dumps(table)),
-                       object_hook=lambda o: base64.b64decode(o["__bytes__"]) if "__bytes__" in o else o)
-clients = {}
-def client(service):
-    return clients.get(service) or clients.setdefault(service, boto3.client(service))
-NAMES = {"PutItem": "put_item", "UpdateItem": "update_item", "DeleteItem": "delete_item",
-         "TransactWriteItems": "transact_write_items", "BatchWriteItem": "batch_write_item",
-         "PutObject": "put_object", "GetItem": "get_item", "BatchGetItem": "batch_get_item",
-         "Query": "query"}
-for service, operation, params in saved["calls"]:
-    getattr(client(service), NAMES[operation])(**params)
+""" + REPLAY_CODE + """
+replay(saved["calls"])
 page = client("dynamodb").query(TableName=table, IndexName="by_rank", ConsistentRead=True,
                                 Limit=int(limit) + 1, KeyConditionExpression="board = :board",
                                 ExpressionAttributeValues={":board": {"S": board}})
@@ -395,23 +405,13 @@ import boto3
 table, saved_file, captured_table, schema, event_file = sys.argv[1:6]
 module, name = schema.rsplit(".", 1)
 model = getattr(__import__(module, fromlist=[name]), name)
-with open(saved_file) as file:
-    saved = json.loads(file.read().replace(json.dumps(captured_table), json.dumps(table)),
-                       object_hook=lambda o: base64.b64decode(o["__bytes__"]) if "__bytes__" in o else o)
 with open(event_file) as file:
     event = json.load(file)
-clients = {}
-def client(service):
-    return clients.get(service) or clients.setdefault(service, boto3.client(service))
-NAMES = {"PutItem": "put_item", "UpdateItem": "update_item", "DeleteItem": "delete_item",
-         "TransactWriteItems": "transact_write_items", "BatchWriteItem": "batch_write_item",
-         "PutObject": "put_object", "GetItem": "get_item", "BatchGetItem": "batch_get_item",
-         "Query": "query"}
+""" + REPLAY_CODE + """
 logger, metrics = Logger(), Metrics()
 app = APIGatewayHttpResolver(enable_validation=True)
 def answer(**_):
-    for service, operation, params in saved["made"]:
-        getattr(client(service), NAMES[operation])(**params)
+    replay(saved["made"])
     return {}
 keyword = inspect.Parameter.KEYWORD_ONLY
 answer.__signature__ = inspect.Signature(
