@@ -217,7 +217,10 @@ def timed_program(argv: list[str], stdout: Path | None = None,
 
 
 def timed_child(code: str, *args: str) -> Timing:
-    """A Python child that times its own work and prints it as JSON ({"wall", "cpu"})."""
+    """A Python child that times its own work and prints it as JSON ({"wall", "cpu"}). What
+    earlier programs wrote is flushed to the disk first: none is timed while the system still
+    writes out another's files (an import and its floor write some 600 MiB each)."""
+    os.sync()
     done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, check=False,
                           text=True)
     if done.returncode != 0:

@@ -32,7 +32,7 @@ import sys
 import tempfile
 import threading
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -67,8 +67,11 @@ Phase = Callable[[str, int | None], Callable[[int], None]]
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
 #: Submissions an import in bulk replays and writes at a time.
 IMPORT_BATCH = 10_000
-#: Lines checked and prepared at a time.
-CHUNK_LINES = 500
+#: Bytes of an export's lines checked and prepared at a time (about 300 submissions; a chunk
+#: holds whole lines, so more where a line would be cut).
+CHUNK_BYTES = 1 << 20
+#: Chunks of submission lines of a few KiB each that make about a batch (IMPORT_BATCH).
+CHUNKS_A_BATCH = 40
 #: From this size on (about 4,000 submissions, a second of checking), an export's lines are
 #: checked on every core, in worker processes: checking a line (its record's schema, its
 #: content hash, its score) is most of an import; starting the workers takes up to half a second.
@@ -255,8 +258,7 @@ def load_export(service: LeaderboardService, name: str, handle: IO[bytes], board
     kept in a temporary file) before anything is written, then a transaction per batch."""
     size = _size(handle)
     bulk, exported, after = _opened(service, name, handle, board_id)
-    with _cycles_collected_after(), _checking(name, exported, bulk, _chunks(name, handle, after),
-                                             size) as checked:
+    with _cycles_collected_after(), _checking(name, exported, bulk, handle, after, size) as checked:
         counted = _counted(checked, phase("Checking the export", size))
         if bulk.holds_whole:
             with bulk.whole():
@@ -280,6 +282,16 @@ def _cycles_collected_after() -> Iterator[None]:
     finally:
         if enabled:
             gc.enable()
+
+
+class _Chunk(NamedTuple):
+    """Whole lines of an export: the number of the line before its first, where they start in
+    the file, how many bytes they are, and those bytes (none where a worker reads them)."""
+
+    after: int
+    offset: int
+    size: int
+    data: bytes
 
 
 class _Checked(NamedTuple):
@@ -357,27 +369,33 @@ def _unspooled(spool: IO[bytes]) -> Iterator[_Checked]:
 
 
 @contextmanager
-def _checking(name: str, exported: Board, bulk: BulkImport, chunks: Iterator[list[tuple[int, bytes]]],
+def _checking(name: str, exported: Board, bulk: BulkImport, handle: IO[bytes], after: int,
               size: int | None) -> Iterator[Iterator[_Checked]]:
-    """Every chunk checked and prepared (``_prepared_chunk``), in the file's order. A big file's
-    chunks are checked in worker processes, one per core, enough chunks ahead to keep them busy
-    while a batch is written: the first bad line in the file is still the one named. Worker
-    processes start (with the first chunks) when the block is entered, by fork where this
-    process runs no other thread (a fork copies no other thread's locks), else by spawn."""
+    """Every chunk of the lines after line ``after`` checked and prepared (``_checked_chunk``),
+    in the file's order. A big file's chunks are checked in worker processes, one per core,
+    enough chunks ahead to keep them busy while a batch is written: the first bad line in the
+    file is still the one named. Worker processes start (with the first chunks) when the block
+    is entered, by fork where this process runs no other thread (a fork copies no other thread's
+    locks), else by spawn. Forked workers read their chunks from the file themselves."""
     from drboard_functions.service.loading import prepare_submission
 
     prepare = functools.partial(prepare_submission, bulk.board)
+    chunks = _chunks(name, handle, after)
     workers = _workers(size)
     if workers < 2 or bulk.archive is not None:  # an archive is written as each line is prepared
-        yield (_prepared_chunk(name, exported, prepare, chunk, bulk.keep) for chunk in chunks)
+        yield (_checked_chunk(name, exported, prepare, chunk, bulk.keep) for chunk in chunks)
         return
-    check = functools.partial(_prepared_chunk, name, exported, prepare)
-    start = "fork" if threading.active_count() == 1 and os.name == "posix" else "spawn"
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start),
-                               initializer=gc.disable)
+    forks = threading.active_count() == 1 and os.name == "posix"
+    check: Callable[[_Chunk], _Checked]
+    if forks:
+        check = functools.partial(_read_and_checked, handle.fileno(), name, exported, prepare)
+    else:
+        check = functools.partial(_checked_chunk, name, exported, prepare)
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(
+        "fork" if forks else "spawn"), initializer=gc.disable)
     try:
-        ahead = _Ahead(pool, check, chunks)
-        ahead.submit(IMPORT_BATCH // CHUNK_LINES + 2 * workers)
+        ahead = _Ahead(pool, check, chunks, sends_data=not forks)
+        ahead.submit(CHUNKS_A_BATCH + 2 * workers)
         yield ahead.checked()
     finally:
         pool.shutdown(cancel_futures=True)
@@ -389,11 +407,12 @@ class _Ahead:
     A line that cannot be read (over the bound) is named once every line before it is checked:
     the first bad line in the file is the one named."""
 
-    def __init__(self, pool: ProcessPoolExecutor, check: Callable[[list[tuple[int, bytes]]], _Checked],
-                 chunks: Iterator[list[tuple[int, bytes]]]) -> None:
+    def __init__(self, pool: ProcessPoolExecutor, check: Callable[[_Chunk], _Checked],
+                 chunks: Iterator[_Chunk], sends_data: bool) -> None:
         self.pool = pool
         self.check = check
         self.chunks = chunks
+        self.sends_data = sends_data
         self.pending: deque[Future[_Checked]] = deque()
         self.unread: BadExportFile | None = None
 
@@ -402,7 +421,8 @@ class _Ahead:
             return
         try:
             for chunk in itertools.islice(self.chunks, count):
-                self.pending.append(self.pool.submit(self.check, chunk))
+                self.pending.append(self.pool.submit(
+                    self.check, chunk if self.sends_data else chunk._replace(data=b"")))
         except BadExportFile as error:
             self.unread = error
 
@@ -429,16 +449,28 @@ def _first_line(name: str, handle: IO[bytes]) -> tuple[int, ExportLine] | None:
     return None
 
 
-def _chunks(name: str, handle: IO[bytes], after: int) -> Iterator[list[tuple[int, bytes]]]:
-    """The lines after line ``after``, numbered, CHUNK_LINES at a time."""
-    chunk: list[tuple[int, bytes]] = []
-    for numbered in _numbered(name, handle, after):
-        chunk.append(numbered)
-        if len(chunk) == CHUNK_LINES:
-            yield chunk
-            chunk = []
-    if chunk:
-        yield chunk
+def _chunks(name: str, handle: IO[bytes], after: int) -> Iterator[_Chunk]:
+    """The lines after line ``after`` (where ``handle`` is), CHUNK_BYTES or so at a time, in
+    chunks of whole lines; only their ends are looked for here (lines are split, and each
+    checked against the bound, where the chunk is checked: ``_checked_chunk``)."""
+    offset = handle.tell()
+    rest = b""
+    while data := handle.read(CHUNK_BYTES):
+        if rest:
+            data = rest + data
+        end = data.rfind(b"\n") + 1
+        if not end:  # no line ends in it yet
+            if len(data) > MAX_LINE_BYTES:
+                raise BadExportFile(f"{name}:{after + 1}: the line is over "
+                                    f"{MAX_LINE_BYTES >> 20} MiB")
+            rest = data
+            continue
+        yield _Chunk(after, offset, end, data[:end])
+        after += data.count(b"\n", 0, end)
+        offset += end
+        rest = data[end:]
+    if rest:
+        yield _Chunk(after, offset, len(rest), rest)
 
 
 def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, bytes]]:
@@ -452,12 +484,39 @@ def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, b
             yield number, raw
 
 
-def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tuple[int, bytes]],
-                    keep: Keep | None = None) -> _Checked:
+def _read_and_checked(file: int, name: str, exported: Board, prepare: Prepare,
+                      chunk: _Chunk) -> _Checked:
+    """``_checked_chunk`` of a chunk given without its bytes, read here from the file (its
+    descriptor, shared with a forked worker)."""
+    data = os.pread(file, chunk.size, chunk.offset)
+    return _checked_chunk(name, exported, prepare, chunk._replace(data=data))
+
+
+def _checked_chunk(name: str, exported: Board, prepare: Prepare, chunk: _Chunk,
+                   keep: Keep | None = None) -> _Checked:
     """Check a chunk of an export's lines after its board line and prepare its submissions."""
+    lines = _lines(name, chunk.after, chunk.data)
+    return _prepared_chunk(name, exported, prepare, lines, keep)._replace(read=chunk.size)
+
+
+def _lines(name: str, after: int, data: bytes) -> Iterator[tuple[int, bytes]]:
+    """The lines of ``data`` that are not blank, numbered from ``after`` + 1, each within the
+    bound (BadExportFile when the line is reached, so that a bad line before it is named first)."""
+    for number, raw in enumerate(data.split(b"\n"), after + 1):
+        if len(raw) > MAX_LINE_BYTES:
+            raise BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
+        if raw and not raw.isspace():  # (stripping would copy every line)
+            yield number, raw
+
+
+def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
+                    lines: Iterable[tuple[int, bytes]], keep: Keep | None = None) -> _Checked:
+    """Check numbered lines of an export after its board line and prepare their submissions."""
     prepared: list[PreparedSubmission] = []
     entries = 0
-    for number, raw in chunk:
+    size = 0
+    for number, raw in lines:
+        size += len(raw)
         where = f"{name}:{number}"
         read: tuple[Submission, Record, str | None] | None = _submission_line(raw)
         if read is None:
@@ -472,7 +531,7 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare, chunk: list[tu
         prepared.append(_prepared_line(where, submission, record, record_json, exported, prepare))
         if keep is not None:
             keep(record)
-    return _Checked(prepared, entries, sum(len(raw) for _, raw in chunk))
+    return _Checked(prepared, entries, size)
 
 
 def _submission_line(raw: bytes) -> tuple[Submission, Record, str] | None:

@@ -58,9 +58,9 @@ def exported(tmp_path: Path) -> Path:
 
 @pytest.fixture
 def small_batches(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Batches of 4 submissions, chunks of 3 lines: many batches written before the end."""
+    """Batches of 4 submissions, chunks of a line or two: many batches written before the end."""
     monkeypatch.setattr(transfer, "IMPORT_BATCH", 4)
-    monkeypatch.setattr(transfer, "CHUNK_LINES", 3)
+    monkeypatch.setattr(transfer, "CHUNK_BYTES", 5_000)
 
 
 def rows(path: Path) -> dict[str, list[tuple[Any, ...]]]:
@@ -142,7 +142,7 @@ DYING_IMPORT = textwrap.dedent("""
     from drboard_functions.service.loading import BulkImport
     from drboard_functions.services import sqlite_service
 
-    transfer.IMPORT_BATCH, transfer.CHUNK_LINES = 4, 3
+    transfer.IMPORT_BATCH, transfer.CHUNK_BYTES = 4, 5_000
     load, written = BulkImport.load, []
 
     def dying(self, batch):

@@ -59,7 +59,7 @@ def rows(path: Path) -> dict[str, list[tuple[Any, ...]]]:
 def in_workers(monkeypatch: pytest.MonkeyPatch) -> None:
     """Every file checked in workers, a few lines to a chunk (so that each worker gets some)."""
     monkeypatch.setattr(transfer, "PARALLEL_FROM_BYTES", 0)
-    monkeypatch.setattr(transfer, "CHUNK_LINES", 7)
+    monkeypatch.setattr(transfer, "CHUNK_BYTES", 10_000)
     monkeypatch.setattr(transfer, "_workers", lambda size: 2)
 
 
@@ -74,7 +74,7 @@ def test_lines_checked_in_workers_give_the_board_checking_them_here_gives(
         other.start()
     try:
         with monkeypatch.context() as patch:
-            patch.setattr(transfer, "CHUNK_LINES", 7)
+            patch.setattr(transfer, "CHUNK_BYTES", 10_000)
             patch.setattr(transfer, "_workers", lambda size: 2)
             in_workers = imported(exported, tmp_path / "workers.db")
     finally:
@@ -104,10 +104,14 @@ def test_a_bad_line_checked_in_a_worker_is_named_and_nothing_is_written(
 
 
 @pytest.mark.usefixtures("in_workers")
+@pytest.mark.parametrize("chunk_bytes", [10_000, 1_000],
+                         ids=["its end in a chunk (a worker finds it)",
+                              "no end within the bound (found as the file is read)"])
 def test_a_bad_line_before_one_over_the_bound_is_the_one_named(
-        exported: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        exported: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, chunk_bytes: int) -> None:
     """The workers are given lines far ahead of the one checked: a line too long to read among
     them waits its turn."""
+    monkeypatch.setattr(transfer, "CHUNK_BYTES", chunk_bytes)
     lines = exported.read_bytes().splitlines(keepends=True)
     bad, long = len(lines) - 30, len(lines) - 3
     head, record = lines[bad - 1].split(b'"record":', 1)
