@@ -389,12 +389,13 @@ def _checking(name: str, exported: Board, bulk: BulkImport, handle: IO[bytes], a
     check: Callable[[_Chunk], _Checked]
     if forks:
         check = functools.partial(_read_and_checked, handle.fileno(), name, exported, prepare)
+        chunks = (chunk._replace(data=b"") for chunk in chunks)  # (read where they are checked)
     else:
         check = functools.partial(_checked_chunk, name, exported, prepare)
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(
         "fork" if forks else "spawn"), initializer=gc.disable)
     try:
-        ahead = _Ahead(pool, check, chunks, sends_data=not forks)
+        ahead = _Ahead(pool, check, chunks)
         ahead.submit(CHUNKS_A_BATCH + 2 * workers)
         yield ahead.checked()
     finally:
@@ -408,11 +409,10 @@ class _Ahead:
     the first bad line in the file is the one named."""
 
     def __init__(self, pool: ProcessPoolExecutor, check: Callable[[_Chunk], _Checked],
-                 chunks: Iterator[_Chunk], sends_data: bool) -> None:
+                 chunks: Iterator[_Chunk]) -> None:
         self.pool = pool
         self.check = check
         self.chunks = chunks
-        self.sends_data = sends_data
         self.pending: deque[Future[_Checked]] = deque()
         self.unread: BadExportFile | None = None
 
@@ -421,8 +421,7 @@ class _Ahead:
             return
         try:
             for chunk in itertools.islice(self.chunks, count):
-                self.pending.append(self.pool.submit(
-                    self.check, chunk if self.sends_data else chunk._replace(data=b"")))
+                self.pending.append(self.pool.submit(self.check, chunk))
         except BadExportFile as error:
             self.unread = error
 
@@ -461,8 +460,7 @@ def _chunks(name: str, handle: IO[bytes], after: int) -> Iterator[_Chunk]:
         end = data.rfind(b"\n") + 1
         if not end:  # no line ends in it yet
             if len(data) > MAX_LINE_BYTES:
-                raise BadExportFile(f"{name}:{after + 1}: the line is over "
-                                    f"{MAX_LINE_BYTES >> 20} MiB")
+                raise _over_the_bound(name, after + 1)
             rest = data
             continue
         yield _Chunk(after, offset, end, data[:end])
@@ -479,9 +477,13 @@ def _numbered(name: str, handle: IO[bytes], after: int) -> Iterator[tuple[int, b
     while raw := handle.readline(MAX_LINE_BYTES + 1):
         number += 1
         if len(raw) > MAX_LINE_BYTES:
-            raise BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
+            raise _over_the_bound(name, number)
         if not raw.isspace():  # (stripping would copy every line)
             yield number, raw
+
+
+def _over_the_bound(name: str, number: int) -> BadExportFile:
+    return BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
 
 
 def _read_and_checked(file: int, name: str, exported: Board, prepare: Prepare,
@@ -495,8 +497,8 @@ def _read_and_checked(file: int, name: str, exported: Board, prepare: Prepare,
 def _checked_chunk(name: str, exported: Board, prepare: Prepare, chunk: _Chunk,
                    keep: Keep | None = None) -> _Checked:
     """Check a chunk of an export's lines after its board line and prepare its submissions."""
-    lines = _lines(name, chunk.after, chunk.data)
-    return _prepared_chunk(name, exported, prepare, lines, keep)._replace(read=chunk.size)
+    return _prepared_chunk(name, exported, prepare, _lines(name, chunk.after, chunk.data), keep,
+                           size=chunk.size)
 
 
 def _lines(name: str, after: int, data: bytes) -> Iterator[tuple[int, bytes]]:
@@ -504,19 +506,19 @@ def _lines(name: str, after: int, data: bytes) -> Iterator[tuple[int, bytes]]:
     bound (BadExportFile when the line is reached, so that a bad line before it is named first)."""
     for number, raw in enumerate(data.split(b"\n"), after + 1):
         if len(raw) > MAX_LINE_BYTES:
-            raise BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
+            raise _over_the_bound(name, number)
         if raw and not raw.isspace():  # (stripping would copy every line)
             yield number, raw
 
 
 def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
-                    lines: Iterable[tuple[int, bytes]], keep: Keep | None = None) -> _Checked:
-    """Check numbered lines of an export after its board line and prepare their submissions."""
+                    lines: Iterable[tuple[int, bytes]], keep: Keep | None = None,
+                    size: int = 0) -> _Checked:
+    """Check numbered lines of an export after its board line (``size`` bytes of it) and prepare
+    their submissions."""
     prepared: list[PreparedSubmission] = []
     entries = 0
-    size = 0
     for number, raw in lines:
-        size += len(raw)
         where = f"{name}:{number}"
         read: tuple[Submission, Record, str | None] | None = _submission_line(raw)
         if read is None:

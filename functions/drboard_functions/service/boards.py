@@ -140,9 +140,9 @@ def live(board_id: str, stored: StoredBoard | None) -> StoredBoard:
 
 
 def event_id(at: datetime) -> str:
-    """Unique, and in time order: the moment, then random digits (which only tell apart the
-    events of one microsecond: no secret, so not the operating system's randomness, a system
-    call an event that an import makes 100,000 times over)."""
+    """Unique, and in time order: the moment, then random digits. The digits only tell apart the
+    events of one microsecond and are no secret: Python's generator makes them, not a system call
+    (which an import of 100,000 submissions would make 100,000 times)."""
     return f"{ranking.timestamp(at)}-{random.getrandbits(32):08x}"
 
 
