@@ -4,6 +4,7 @@ nothing is written."""
 
 from __future__ import annotations
 
+import gc
 import json
 import sqlite3
 import threading
@@ -126,3 +127,17 @@ def test_a_bad_line_before_one_over_the_bound_is_the_one_named(
     with pytest.raises(transfer.BadExportFile, match=rf"export\.jsonl:{long}: the line is over"):
         imported(exported, tmp_path / "target.db")
     assert rows(tmp_path / "target.db")["submissions"] == []
+
+
+@pytest.mark.parametrize("enabled", [True, False], ids=["collector on", "collector off"])
+def test_an_import_leaves_the_cycle_collector_as_it_found_it(
+        exported: Path, tmp_path: Path, enabled: bool) -> None:
+    """The collector is paused while an import runs: a process that lives on after it (a
+    server, a notebook) gets it back as it was."""
+    was = gc.isenabled()
+    (gc.enable if enabled else gc.disable)()
+    try:
+        assert imported(exported, tmp_path / "target.db").created == 43
+        assert gc.isenabled() is enabled
+    finally:
+        (gc.enable if was else gc.disable)()
