@@ -52,7 +52,8 @@ NOT_SHIPPED = {"pull": ["regex", "disarm"], "push": ["jinja2", "markupsafe", "se
 
 #: Run in a fresh process: import the handler, answer events on an SQLite board (the wiring
 #: swapped as in test_handlers) with some libraries missing, and tell the modules loaded, the
-#: answers' statuses and whether the Record's schema was built.
+#: answers' statuses, whether the Record's schema was built, and whether the cycle collector ran
+#: after the import and after the answers (and how many objects it was kept from).
 PROBE = """
 import json, sys
 from importlib.abc import MetaPathFinder
@@ -68,6 +69,8 @@ class Missing(MetaPathFinder):
 sys.meta_path.insert(0, Missing())
 handler = __import__("drboard_functions.handlers." + kind, fromlist=["lambda_handler"])
 imported = sorted(sys.modules)
+import gc
+collector = {"after_import": gc.isenabled()}
 from functools import cache
 from drboard_functions.handlers import wiring
 from drboard_functions.services import sqlite_service
@@ -82,17 +85,21 @@ class Context:
     aws_request_id = "test"; log_group_name = "test"; log_stream_name = "test"
 answered = {Path(event).name: handler.lambda_handler(json.loads(Path(event).read_text()),
                                                     Context())["statusCode"] for event in events}
+collector |= {"after_answers": gc.isenabled(), "frozen": gc.get_freeze_count()}
 from drboard_assembler.record import Record
 print(json.dumps({"imported": imported, "answered": answered, "loaded": sorted(sys.modules),
-                  "record_schema_built": Record.__pydantic_complete__}))
+                  "record_schema_built": Record.__pydantic_complete__, "collector": collector}))
 """
 
 
-def probe(kind: str, db: Path | None = None, *events: str,
-          missing: tuple[str, ...] = ()) -> dict[str, object]:
+def probe(kind: str, db: Path | None = None, *events: str, missing: tuple[str, ...] = (),
+          runtime: dict[str, str] | None = None) -> dict[str, object]:
+    """What a fresh process of the handler loads and answers; ``runtime``: the variables the
+    Lambda runtime sets besides (none: a process that is no function's, a test's or a server's)."""
     arguments = [kind, str(db or ""), " ".join(missing), *(str(EVENTS / event) for event in events)]
+    environment = {name: value for name, value in os.environ.items() if name != "AWS_EXECUTION_ENV"}
     done = subprocess.run([sys.executable, "-c", PROBE, *arguments], capture_output=True, text=True,
-                          check=False, env={**os.environ, **LAMBDA_ENVIRONMENT})
+                          check=False, env=environment | LAMBDA_ENVIRONMENT | (runtime or {}))
     assert done.returncode == 0, done.stderr
     found: dict[str, object] = json.loads(done.stdout.splitlines()[-1])
     return found
@@ -148,6 +155,34 @@ def test_a_push_to_a_board_in_no_season_loads_no_season_webhook_or_unicode_table
     assert found["answered"] == {"push.json": 201}
     assert among(found["loaded"], ("drboard_functions.models.seasons", "drboard_functions.service.seasons",
                                    "drboard_functions.models.notices", "regex", "disarm")) == []
+
+
+#: What the Lambda runtime sets that tells a function's container (Python 3.13's).
+LAMBDA_RUNTIME = {"AWS_EXECUTION_ENV": "AWS_Lambda_python3.13"}
+
+
+@pytest.mark.parametrize(("kind", "event", "status"), [
+    ("push", "push.json", 201), ("pull", "pull_board.json", 200),
+    ("admin", "admin_create_board.json", 201)])
+def test_a_cold_start_in_lambda_runs_without_the_cycle_collector_until_its_first_answer(
+        tmp_path: Path, kind: str, event: str, status: int) -> None:
+    """The collector sleeps through the import and the first request, then runs again with what
+    the cold start loaded frozen out of its way."""
+    db = tmp_path / "board.db"
+    if kind == "pull":
+        sqlite_service(db).push(event_record())
+    found = probe(kind, db, event, runtime=LAMBDA_RUNTIME)
+    assert found["answered"] == {event: status}
+    collector = found["collector"]
+    assert isinstance(collector, dict)
+    assert (collector["after_import"], collector["after_answers"]) == (False, True)
+    assert collector["frozen"] > 10_000
+
+
+def test_importing_a_handler_elsewhere_leaves_the_cycle_collector_alone(tmp_path: Path) -> None:
+    found = probe("push", tmp_path / "board.db", "push.json")
+    assert found["answered"] == {"push.json": 201}
+    assert found["collector"] == {"after_import": True, "after_answers": True, "frozen": 0}
 
 
 def test_each_admin_route_is_found_in_the_module_that_declares_it() -> None:

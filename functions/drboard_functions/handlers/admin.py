@@ -18,7 +18,7 @@ from aws_lambda_powertools.utilities.typing import LambdaContext
 from ..errors import BoardNotFound
 from ..identity import caller_from_event
 from ..routes import BoardResolver, admin_routes_module, build_app, canonical_event
-from . import wiring
+from . import collector_after_first_answer, wiring
 
 logger = Logger()
 metrics = Metrics()
@@ -86,6 +86,7 @@ class AdminRoutes:
 admin_routes = AdminRoutes()
 
 
+@collector_after_first_answer
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
 @metrics.log_metrics(capture_cold_start_metric=True)
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:

@@ -21,7 +21,7 @@ from aws_lambda_powertools.utilities.typing import LambdaContext
 
 from ..models.domain import Entry
 from ..models.notices import EntryChange
-from . import wiring
+from . import collector_after_first_answer, wiring
 
 logger = Logger()
 processor = BatchProcessor(event_type=EventType.DynamoDBStreams)
@@ -52,6 +52,7 @@ def entry_change(record: DynamoDBRecord) -> EntryChange | None:
                        at=at if at is not None else datetime.now(UTC))
 
 
+@collector_after_first_answer
 @logger.inject_lambda_context
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:
     if event.get("check") == "windows":

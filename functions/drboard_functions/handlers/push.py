@@ -20,7 +20,7 @@ from aws_lambda_powertools.utilities.typing import LambdaContext
 from ..errors import DomainError
 from ..routes import build_app, canonical_event, push_router
 from ..routes.standings import keeping_after_pushes
-from . import wiring
+from . import collector_after_first_answer, wiring
 
 logger = Logger()
 metrics = Metrics()
@@ -48,6 +48,7 @@ app = build_app(push_router)
 app.use(middlewares=[count_submissions])
 
 
+@collector_after_first_answer
 @logger.inject_lambda_context(correlation_id_path=correlation_paths.API_GATEWAY_HTTP)
 @metrics.log_metrics(capture_cold_start_metric=True)
 def lambda_handler(event: dict[str, Any], context: LambdaContext) -> dict[str, Any]:

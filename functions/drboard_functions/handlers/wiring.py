@@ -12,6 +12,9 @@ Each piece is built on first use, and imports what it needs then: the pull funct
 kept page with :func:`kept_pages_from_environment` (a DynamoDB client and the table's page shelf),
 and the card function a card drawn from one with :func:`kept_cards_from_environment`, before
 anything builds the service or loads a model.
+
+``AWS_EXECUTION_ENV``, which the Lambda runtime sets (``AWS_Lambda_python3.13``), tells a
+function's container from any other process that imports the handlers (tests, `drboard serve`).
 """
 
 from __future__ import annotations
@@ -30,6 +33,10 @@ if TYPE_CHECKING:
     from ..notify.notifier import Notifier
     from ..routes.kept import KeptCards, KeptPages
     from ..service import LeaderboardService
+
+
+def in_lambda_runtime() -> bool:
+    return os.environ.get("AWS_EXECUTION_ENV", "").startswith("AWS_Lambda_")
 
 
 @cache
