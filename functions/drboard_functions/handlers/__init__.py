@@ -2,8 +2,9 @@
 ``card``), the announcer (``notify``) and their wiring.
 
 Each handler module builds its resolver once per container, with only its own routes (see
-:mod:`drboard_functions.routes`); ``lambda_handler`` only adds the observability decorators (the
-logger and the metrics), puts the service in the resolver's context and resolves the event.
+:mod:`drboard_functions.routes`); ``lambda_handler`` only adds its decorators (the collector's,
+below, the logger and the metrics), puts the service in the resolver's context and resolves the
+event.
 
 Tracing is Lambda's own (``Tracing: Active`` in template.yaml): X-Ray gets each invocation's
 segment, with its initialisation, invocation and overhead, from the Lambda service, at no cost
