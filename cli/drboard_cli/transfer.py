@@ -67,10 +67,10 @@ Phase = Callable[[str, int | None], Callable[[int], None]]
 MAX_LINE_BYTES = 1 << 20  # a record is at most 64 KiB; its JSON line stays well under this
 #: Submissions an import in bulk replays and writes at a time.
 IMPORT_BATCH = 10_000
-#: Bytes of an export's lines checked and prepared at a time (about 300 submissions; a chunk
-#: holds whole lines, so more where a line would be cut).
+#: Bytes of an export's lines checked and prepared at a time (about 260 submissions and their
+#: entry lines, some 4 KiB a pair; a chunk holds whole lines, so more where a line would be cut).
 CHUNK_BYTES = 1 << 20
-#: Chunks of submission lines of a few KiB each that make about a batch (IMPORT_BATCH).
+#: Chunks of that size that make about a batch (IMPORT_BATCH).
 CHUNKS_A_BATCH = 40
 #: From this size on (about 4,000 submissions, a second of checking), an export's lines are
 #: checked on every core, in worker processes: checking a line (its record's schema, its
