@@ -76,6 +76,10 @@ CHUNKS_A_BATCH = 40
 #: checked on every core, in worker processes: checking a line (its record's schema, its
 #: content hash, its score) is most of an import; starting the workers takes up to half a second.
 PARALLEL_FROM_BYTES = 16 << 20
+#: How much lower than the import's own process its checking workers run (``os.nice``): the
+#: process writing the board, whose work cannot be split, goes first, and so does whatever else
+#: the computer runs (a `drboard serve` answering racers); the workers take the CPU left.
+WORKER_NICENESS = 10
 #: How an import in bulk reads an export's records: as the board's own stored records are read
 #: (schema and bounds; not today's rules of aliases, text, tracks and lap floors).
 IMPORT_CHECKS = {"stored": True}
@@ -288,6 +292,14 @@ def _cycles_collected_after() -> Iterator[None]:
             gc.enable()
 
 
+def _worker_started() -> None:
+    """A checking worker's start: behind the import's own process (WORKER_NICENESS), and without
+    the cycle collector (its chunks make no cycles)."""
+    if hasattr(os, "nice"):  # (not on Windows)
+        os.nice(WORKER_NICENESS)
+    gc.disable()
+
+
 class _Chunk(NamedTuple):
     """Whole lines of an export: the number of the line before its first, where they start in
     the file, how many bytes they are, and those bytes (none where a worker reads them)."""
@@ -397,7 +409,7 @@ def _checking(name: str, exported: Board, bulk: BulkImport, handle: IO[bytes], a
     else:
         check = functools.partial(_checked_chunk, name, exported, prepare)
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(
-        "fork" if forks else "spawn"), initializer=gc.disable)
+        "fork" if forks else "spawn"), initializer=_worker_started)
     try:
         ahead = _Ahead(pool, check, chunks)
         ahead.submit(CHUNKS_A_BATCH + 2 * workers)

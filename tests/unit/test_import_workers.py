@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import gc
 import json
+import os
 import sqlite3
 import threading
 from datetime import UTC, datetime, timedelta
@@ -127,6 +128,29 @@ def test_a_bad_line_before_one_over_the_bound_is_the_one_named(
     with pytest.raises(transfer.BadExportFile, match=rf"export\.jsonl:{long}: the line is over"):
         imported(exported, tmp_path / "target.db")
     assert rows(tmp_path / "target.db")["submissions"] == []
+
+
+@pytest.mark.usefixtures("in_workers")
+@pytest.mark.skipif(not hasattr(os, "nice"), reason="no process priorities to set here")
+def test_the_workers_checking_lines_run_behind_the_process_writing_the_board(
+        exported: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The workers take the CPU left by the import's own process, whose writes cannot be split,
+    and by whatever else the computer runs (a `drboard serve` answering racers)."""
+    noted = tmp_path / "niceness"
+    noted.mkdir()
+    checked = transfer._checked_chunk
+
+    def noting_niceness(*args: Any, **kwargs: Any) -> Any:
+        (noted / str(os.getpid())).write_text(str(os.nice(0)))
+        return checked(*args, **kwargs)
+
+    monkeypatch.setattr(transfer, "_checked_chunk", noting_niceness)  # (forked workers have it)
+    own = os.nice(0)
+    assert imported(exported, tmp_path / "target.db").created == 43
+    workers = {int(path.name): int(path.read_text()) for path in noted.iterdir()}
+    assert workers and os.getpid() not in workers
+    assert set(workers.values()) == {min(own + transfer.WORKER_NICENESS, 19)}
+    assert os.nice(0) == own
 
 
 @pytest.mark.parametrize("enabled", [True, False], ids=["collector on", "collector off"])
