@@ -34,7 +34,7 @@ import threading
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -296,7 +296,8 @@ def _worker_started() -> None:
     """A checking worker's start: behind the import's own process (WORKER_NICENESS), and without
     the cycle collector (its chunks make no cycles)."""
     if hasattr(os, "nice"):  # (not on Windows)
-        os.nice(WORKER_NICENESS)
+        with suppress(OSError):  # a system that refuses it gets a worker at its own priority
+            os.nice(WORKER_NICENESS)
     gc.disable()
 
 
