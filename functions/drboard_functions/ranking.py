@@ -89,7 +89,9 @@ def rank_key(key: str, achieved_at: datetime, racer_key: str) -> str:
 
 
 def timestamp(moment: datetime) -> str:
-    return moment.astimezone(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+    """``2024-05-06T02:08:09.123456Z``: UTC, to the microsecond, of one width (from the year
+    1000), so that as text they sort in time order."""
+    return moment.astimezone(UTC).isoformat(timespec="microseconds")[:-6] + "Z"  # "+00:00"
 
 
 def parse_timestamp(text: str) -> datetime:

@@ -115,20 +115,21 @@ def check_not_deleted(board: Board) -> None:
 
 
 def check_belongs(record: Record, board: Board) -> None:
+    mismatches = run_mismatches(record.track, record.direction, record.race_type, board)
+    required = board.rules.conditions
+    unmet_by_all = not any(meets(required, run) for run in record.evaluations)
+    if not mismatches and not unmet_by_all:
+        return
     problem = {
         "track": f"the run is on {record.track}, the board on {board.track}",
         "direction": "the run and the board differ in direction",
         "race_type": f"the run is {record.race_type.value}, the board {board.race_type.value}",
     }
-    problems = [problem[field] for field in
-                run_mismatches(record.track, record.direction, record.race_type, board)]
-    required = board.rules.conditions
-    if not any(meets(required, run) for run in record.evaluations):
+    problems = [problem[field] for field in mismatches]
+    if unmet_by_all:
         problems.append("its evaluation ran under other conditions: "
                         + ", ".join(unmet(required, record.best_run.conditions)))
-    if problems:
-        raise BoardMismatch(f"this run does not belong on {board.board_id!r}: "
-                            + "; ".join(problems))
+    raise BoardMismatch(f"this run does not belong on {board.board_id!r}: " + "; ".join(problems))
 
 
 def live(board_id: str, stored: StoredBoard | None) -> StoredBoard:
