@@ -310,7 +310,7 @@ class BoardServer:
         # serve builds every event itself, so no client can claim an authorizer context
         caller = LOCAL_ORGANISER if local else self._racer(event["headers"])
         if caller is not None:
-            event["requestContext"]["authorizer"] = {"lambda": caller.model_dump()}
+            event["requestContext"]["authorizer"] = {"lambda": caller._asdict()}
         resolvers = self.resolvers.get()
         try:
             result = _resolve(resolvers.local if local else resolvers.public, event, self.service,

@@ -13,18 +13,18 @@ The authorizer context a request carries is one of:
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 from pydantic import BaseModel, ConfigDict
 
 ORGANISERS_GROUP = "organisers"
 
 
-class Caller(BaseModel):
+class Caller(NamedTuple):
     """A signed-in caller. ``principal`` is stable and unique (``cognito:<sub>``,
-    ``iam:<arn>``, ``join:<id>``, ``local``); ``name`` is for people (audit, whoami)."""
-
-    model_config = ConfigDict(frozen=True, defer_build=True)  # built on first use, not at import
+    ``iam:<arn>``, ``join:<id>``, ``local``); ``name`` is for people (audit, whoami). Made here
+    and by the edges from what they checked themselves, never read from a client's JSON: a
+    value, not a schema."""
 
     principal: str
     name: str = ""

@@ -1,8 +1,13 @@
 """The leaderboard's domain: boards and their rules, entries, submissions, scores, aliases and
-the audit trail, as the service reasons about them and the stores keep them."""
+the audit trail, as the service reasons about them and the stores keep them.
+
+The values the service and the stores only hand each other (a run's print and its authors, a
+racer's tally, a push's limits and its outcome) are plain named tuples: they are made from what
+was checked already and never read from JSON, so there is nothing to validate and no schema to
+build when a function starts."""
 
 from datetime import UTC, datetime
-from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, Literal, NamedTuple, Self, TypeVar
 
 from drboard_assembler.record import Conditions, RaceType
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, model_validator
@@ -178,7 +183,7 @@ class EventBans(Model):
     principals: Annotated[list[str], Field(max_length=MAX_BANNED)] = []
 
 
-class RunPrint(Model):
+class RunPrint(NamedTuple):
     """What identifies one evaluation run of a submission, for copies and near-copies: its
     fingerprint, the lane its lap times compare in (track and direction), and the sorted times
     of its complete laps when it has enough of them to be compared (else None)."""
@@ -188,7 +193,7 @@ class RunPrint(Model):
     laps_ms: list[int] | None = None
 
 
-class RunAuthor(Model):
+class RunAuthor(NamedTuple):
     """A racer who pushed a run (by fingerprint), and when they first did, anywhere."""
 
     fingerprint: str
@@ -198,7 +203,7 @@ class RunAuthor(Model):
     submission_id: str
 
 
-class NearRun(Model):
+class NearRun(NamedTuple):
     """A stored run whose complete laps may be close to another's (see RunPrint)."""
 
     fingerprint: str
@@ -208,7 +213,7 @@ class NearRun(Model):
     laps_ms: list[int]
 
 
-class RacerTally(Model):
+class RacerTally(NamedTuple):
     """How many submissions a racer made on a board, and when the last one was."""
 
     submissions: int = 0
@@ -259,7 +264,7 @@ class Entry(Model):
     rank_key: str
 
 
-class SubmissionLimits(Model):
+class SubmissionLimits(NamedTuple):
     """What a store checks atomically with a push: the racer's last submission on the board is
     at least ``cooldown_s`` before ``now``, and they have made fewer than ``max_submissions``;
     and, when given, that the board's settings and the event's bans are still at the versions
@@ -325,7 +330,7 @@ class AuditEvent(Model):
     detail: str = ""
 
 
-class WriteOutcome(Model):
+class WriteOutcome(NamedTuple):
     duplicate: bool
     improved: bool
     entry: Entry

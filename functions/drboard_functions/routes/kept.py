@@ -18,7 +18,6 @@ import re
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from http import HTTPStatus
 from typing import TYPE_CHECKING, Any, Generic, Literal, NamedTuple, TypeVar
@@ -97,8 +96,7 @@ def wanted(method: str, path: str, query: str) -> Wanted | None:
     return Wanted(unquote(segment), kind, limit)  # type: ignore[arg-type]
 
 
-@dataclass(frozen=True)
-class Copy:
+class Copy(NamedTuple):
     """One page as it answers: its bytes (and text, for an API Gateway answer), its headers for
     200 and for 304, the board version it was rendered from, and until when it holds."""
 
@@ -110,8 +108,8 @@ class Copy:
     headers: dict[str, str]
     not_modified_headers: dict[str, str]
     #: The same headers as ASGI wants them (lower-case bytes, Content-Length included).
-    raw_headers: list[tuple[bytes, bytes]] = field(repr=False)
-    raw_not_modified_headers: list[tuple[bytes, bytes]] = field(repr=False)
+    raw_headers: list[tuple[bytes, bytes]]
+    raw_not_modified_headers: list[tuple[bytes, bytes]]
     #: A binary body (a card's PNG): ``text`` is its base64, as API Gateway carries it.
     binary: bool = False
 

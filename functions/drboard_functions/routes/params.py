@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any, NamedTuple, TypeVar
 from urllib.parse import unquote
 
 from aws_lambda_powertools.event_handler import (
@@ -129,8 +128,7 @@ def origin(event: Any) -> str:
 # ---- request bodies: what each route takes, and its bound --------------------------------------
 
 
-@dataclass(frozen=True)
-class RequestBody:
+class RequestBody(NamedTuple):
     """What a route's JSON body is: its name in messages, its bound in bytes (checked before it
     is parsed), and the domain error a body that fails validation answers as."""
 

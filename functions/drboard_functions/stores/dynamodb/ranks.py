@@ -25,8 +25,7 @@ from __future__ import annotations
 import secrets
 import time
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from botocore.exceptions import ClientError
 
@@ -73,8 +72,7 @@ NOTHING_COUNTED = FIRST_ENTRY  # every entry's rank key sorts after it
 Keys = tuple[str, str]
 
 
-@dataclass(frozen=True)
-class RankState:
+class RankState(NamedTuple):
     """A board's rank counters: the generation in use (None: none yet), or the one being built
     and how far (the last rank key counted)."""
 
