@@ -40,8 +40,8 @@ from drboard_cli.main import cli  # noqa: E402
 from drboard_cli.transfer import IMPORT_BATCH  # noqa: E402  (as `drboard import` loads them)
 from drboard_functions import ranking  # noqa: E402
 from drboard_functions.models.domain import Board, Design, Entry, Score  # noqa: E402
+from drboard_functions.models.organiser_views import RankCounters  # noqa: E402
 from drboard_functions.models.requests import ImportedSubmission  # noqa: E402
-from drboard_functions.models.views import RankCounters  # noqa: E402
 from drboard_functions.service import LeaderboardService, racer_key  # noqa: E402
 from drboard_functions.stores.base import RankBuild  # noqa: E402
 from drboard_functions.stores.dynamodb import (  # noqa: E402

@@ -28,6 +28,21 @@ from drboard_functions import errors
 from drboard_functions.laps import LAP_COLUMNS
 from drboard_functions.models.domain import MAX_PAGE, Board
 from drboard_functions.models.notices import Delivery, TargetKind, WebhookList, WebhookSpec, WebhookView
+from drboard_functions.models.organiser_views import (
+    AliasList,
+    AliasView,
+    AuditPage,
+    Moderation,
+    RankCounters,
+    RecheckPage,
+)
+from drboard_functions.models.racer_views import (
+    Comparison,
+    Insights,
+    RacerHistory,
+    RacerSummary,
+    RacerView,
+)
 from drboard_functions.models.requests import (
     AliasAssignment,
     AliasRequest,
@@ -46,24 +61,13 @@ from drboard_functions.models.seasons import (
 )
 from drboard_functions.models.transfer import ExportKind, ExportPage, ImportReceipt
 from drboard_functions.models.views import (
-    AliasList,
-    AliasView,
-    AuditPage,
     BoardList,
     BoardPage,
     BoardView,
-    Comparison,
     HistoryItem,
-    Insights,
     Me,
-    Moderation,
     PushAccepted,
     PushReceipt,
-    RacerHistory,
-    RacerSummary,
-    RacerView,
-    RankCounters,
-    RecheckPage,
 )
 from drboard_functions.service import default_board_id
 from drboard_functions.service.results import LapsPage

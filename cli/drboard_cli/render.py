@@ -34,22 +34,22 @@ from drboard_functions.flags import DESCRIPTIONS
 from drboard_functions.insights import LABELS, fact_text
 from drboard_functions.laps import cell as formula_safe
 from drboard_functions.models.domain import AuditEvent, BoardStatus, Design
-from drboard_functions.models.views import (
-    AliasView,
-    BoardPage,
-    BoardView,
+from drboard_functions.models.organiser_views import AliasView, FlaggedRun, Moderation
+from drboard_functions.models.racer_views import (
     Comparison,
-    EntryView,
-    FlaggedRun,
-    HistoryItem,
     Insights,
-    Me,
-    Moderation,
-    PushAccepted,
-    PushReceipt,
     RacerStatus,
     RacerSummary,
     RacerView,
+)
+from drboard_functions.models.views import (
+    BoardPage,
+    BoardView,
+    EntryView,
+    HistoryItem,
+    Me,
+    PushAccepted,
+    PushReceipt,
 )
 from rich.console import Console, Group
 from rich.table import Table

@@ -17,6 +17,15 @@ if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` i
         WebhookSpec,
         WebhookView,
     )
+    from drboard_functions.models.organiser_views import (
+        AliasList,
+        AliasView,
+        AuditPage,
+        Moderation,
+        RankCounters,
+        RecheckPage,
+    )
+    from drboard_functions.models.racer_views import Comparison, Insights, RacerSummary, RacerView
     from drboard_functions.models.requests import BoardChanges, BoardSpec, ImportedSubmission
     from drboard_functions.models.seasons import (
         FinalSpec,
@@ -28,22 +37,12 @@ if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` i
     )
     from drboard_functions.models.transfer import ExportKind, ExportPage, ImportReceipt
     from drboard_functions.models.views import (
-        AliasList,
-        AliasView,
-        AuditPage,
         BoardPage,
         BoardView,
-        Comparison,
         HistoryItem,
-        Insights,
         Me,
-        Moderation,
         PushAccepted,
         PushReceipt,
-        RacerSummary,
-        RacerView,
-        RankCounters,
-        RecheckPage,
     )
     from drboard_functions.service.results import LapsPage
 

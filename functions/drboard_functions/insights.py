@@ -10,7 +10,7 @@ from typing import Any
 from drboard_assembler.record import Hyperparameters, Record
 
 from .display import DASH, UNKNOWN, algorithm_name
-from .models.views import DesignFacts, SharedFact
+from .models.racer_views import DesignFacts, SharedFact
 
 #: The facts insights summarise, with how people read them (in this order).
 LABELS = {

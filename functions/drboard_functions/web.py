@@ -34,8 +34,9 @@ from .display import design_summary as _design_summary
 from .flags import DESCRIPTIONS
 from .insights import LABELS, algorithm_differences, design_facts, fact_text
 from .models.domain import BoardStatus, Design, TimingMethod
+from .models.racer_views import Comparison, Insights, RacerView
 from .models.seasons import SeasonLink
-from .models.views import BoardPage, BoardView, Comparison, EntryView, Insights, RacerView
+from .models.views import BoardPage, BoardView, EntryView
 from .templating import environment
 
 if TYPE_CHECKING:  # loads with the first page that needs it (see the module's docstring)

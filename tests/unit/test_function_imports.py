@@ -150,11 +150,16 @@ def test_the_admin_function_loads_only_the_routes_of_the_request(tmp_path: Path)
 
 def test_a_push_to_a_board_in_no_season_loads_no_season_webhook_or_unicode_table(tmp_path: Path) -> None:
     """A cold push of an ASCII alias to a board that is no season's final leaves out the seasons'
-    models and rules, the live board's notices, and the Unicode tables of regex and disarm."""
+    models and rules, the live board's notices, and the Unicode tables of regex and disarm; and
+    the views it never answers with (a racer's pages, the organisers'), whose classes it would
+    otherwise define at every cold start."""
     found = probe("push", tmp_path / "board.db", "push.json")
     assert found["answered"] == {"push.json": 201}
     assert among(found["loaded"], ("drboard_functions.models.seasons", "drboard_functions.service.seasons",
                                    "drboard_functions.models.notices", "regex", "disarm")) == []
+    assert among(found["loaded"], ("drboard_functions.service.racers", "drboard_functions.insights",
+                                   "drboard_functions.models.racer_views",
+                                   "drboard_functions.models.organiser_views")) == []
 
 
 #: What the Lambda runtime sets that tells a function's container (Python 3.13's).

@@ -34,15 +34,9 @@ from drboard_functions.errors import (
     TooSoon,
 )
 from drboard_functions.models.domain import Board
+from drboard_functions.models.racer_views import RacerHistory, RacerSummary, RacerView
 from drboard_functions.models.transfer import ExportedBoard, ExportedEntry, ExportedSubmission, ExportPage
-from drboard_functions.models.views import (
-    BoardPage,
-    BoardView,
-    PushReceipt,
-    RacerHistory,
-    RacerSummary,
-    RacerView,
-)
+from drboard_functions.models.views import BoardPage, BoardView, PushReceipt
 from drboard_functions.routes import (
     IMPORT_BODY,
     MAX_BOARD_BODY_BYTES,

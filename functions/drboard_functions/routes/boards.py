@@ -12,7 +12,8 @@ from aws_lambda_powertools.event_handler import (
 )
 
 from ..identity import SignIn
-from ..models.views import BoardList, BoardPage, Comparison, Insights, RacerHistory, RacerSummary, RacerView
+from ..models.racer_views import Comparison, Insights, RacerHistory, RacerSummary, RacerView
+from ..models.views import BoardList, BoardPage
 from ..service import DEFAULT_TOP
 from ..views import page_tag
 from .headers import etag_headers, names_etag, page_etag

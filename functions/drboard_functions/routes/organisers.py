@@ -13,17 +13,17 @@ from drboard_assembler import limits
 
 from ..errors import InvalidQuery
 from ..models.domain import Board
-from ..models.requests import AliasAssignment, BoardChanges, BoardSpec, ImportedSubmission
-from ..models.transfer import ExportPage, ImportReceipt
-from ..models.views import (
+from ..models.organiser_views import (
     AliasList,
     AliasView,
     AuditPage,
-    BoardView,
     Moderation,
     RankCounters,
     RecheckPage,
 )
+from ..models.requests import AliasAssignment, BoardChanges, BoardSpec, ImportedSubmission
+from ..models.transfer import ExportPage, ImportReceipt
+from ..models.views import BoardView
 from .params import (
     ADMIN_TAG,
     ASSIGNMENT_BODY,

@@ -3,7 +3,8 @@
 The service never touches a database: it speaks to a BoardStore. It takes validated Records and
 returns the view models the API serialises and the CLI prints. Each concern has its own module:
 ``boards`` (which board a run belongs on, the checks a board makes, the audit trail),
-``pushing`` (a push and its trust rules), ``reading`` (standings, racers, comparisons),
+``pushing`` (a push and its trust rules), ``reading`` (boards and their standings),
+``racers`` (a racer's pages, designs compared),
 ``managing`` (organisers' named boards), ``moderating`` (entries off a board, bans, the audit
 trail's reading), ``transfer`` (export, import and a board's recheck), ``aliases`` (the
 organisers' hand on racers' aliases), ``results`` (laps to analyse), ``webhooks`` (the chat's
@@ -34,9 +35,10 @@ if TYPE_CHECKING:
     from .copies import evaluation_fingerprints
     from .managing import Managing
     from .moderating import Moderating
-    from .paging import DEFAULT_PAGE
+    from .paging import DEFAULT_PAGE, DEFAULT_TOP, MAX_COMPARED, MAX_TOP
     from .pushing import Pushing, check_record_size, scored_write
-    from .reading import DEFAULT_TOP, MAX_COMPARED, MAX_TOP, Reading
+    from .racers import Racers
+    from .reading import Reading
     from .results import LAPS_PAGE, Results
     from .seasons import Seasons
     from .sharing import Sharing
@@ -53,8 +55,8 @@ __all__ = [
 ]
 
 #: The module each name exported from a room's module comes from (loaded on first use).
-_HOMES = {"DEFAULT_PAGE": "paging", "DEFAULT_TOP": "reading", "MAX_COMPARED": "reading",
-          "MAX_TOP": "reading", "LAPS_PAGE": "results", "check_record_size": "pushing",
+_HOMES = {"DEFAULT_PAGE": "paging", "DEFAULT_TOP": "paging", "MAX_COMPARED": "paging",
+          "MAX_TOP": "paging", "LAPS_PAGE": "results", "check_record_size": "pushing",
           "scored_write": "pushing", "evaluation_fingerprints": "copies"}
 
 
@@ -87,6 +89,7 @@ if not TYPE_CHECKING:  # each room's class stands for its module until the servi
     Managing = _Unloaded("managing", "Managing")
     Moderating = _Unloaded("moderating", "Moderating")
     Pushing = _Unloaded("pushing", "Pushing")
+    Racers = _Unloaded("racers", "Racers")
     Reading = _Unloaded("reading", "Reading")
     Results = _Unloaded("results", "Results")
     Seasons = _Unloaded("seasons", "Seasons")
@@ -127,6 +130,10 @@ class LeaderboardService:
     @cached_property
     def _reading(self) -> Reading:
         return Reading(self._keeper)
+
+    @cached_property
+    def _racers(self) -> Racers:
+        return Racers(self._keeper, self._reading)
 
     @cached_property
     def _managing(self) -> Managing:
@@ -170,12 +177,13 @@ class LeaderboardService:
     board_pages = _handed_to("_reading", Reading.board_pages)
     board_tag = _handed_to("_reading", Reading.board_tag)
     board_version = _handed_to("_reading", Reading.board_version)
-    racer = _handed_to("_reading", Reading.racer)
-    compare = _handed_to("_reading", Reading.compare)
-    insights = _handed_to("_reading", Reading.insights)
-    history = _handed_to("_reading", Reading.history)
-    history_page = _handed_to("_reading", Reading.history_page)
-    status = _handed_to("_reading", Reading.status)
+
+    racer = _handed_to("_racers", Racers.racer)
+    compare = _handed_to("_racers", Racers.compare)
+    insights = _handed_to("_racers", Racers.insights)
+    history = _handed_to("_racers", Racers.history)
+    history_page = _handed_to("_racers", Racers.history_page)
+    status = _handed_to("_racers", Racers.status)
 
     create_board = _handed_to("_managing", Managing.create_board)
     update_board = _handed_to("_managing", Managing.update_board)

@@ -14,7 +14,7 @@ from ..cursors import decode_page_cursor, page_cursor
 from ..errors import AliasTaken, InvalidQuery, RacerNotFound
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import AliasClaim
-from ..models.views import AliasList, AliasView, AuditPage
+from ..models.organiser_views import AliasList, AliasView, AuditPage
 from .boards import EVENT_ID, BoardKeeper, racer_key
 from .paging import DEFAULT_PAGE, bad_cursor, check_limit
 from .pushing import RESERVED, valid_alias

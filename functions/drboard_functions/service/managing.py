@@ -6,8 +6,9 @@ from ..board_ids import CUSTOM_PREFIX, default_board_id, is_default_board_id
 from ..errors import BoardExists, BoardLocked, BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import BoardConditions, BoardRules, BoardStatus
+from ..models.organiser_views import RankCounters
 from ..models.requests import BoardChanges, BoardSpec
-from ..models.views import BoardView, RankCounters
+from ..models.views import BoardView
 from .boards import LOCKED, BoardKeeper, spec_track, valid_board
 
 

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from ..errors import BoardNotFound, InvalidQuery, RacerNotFound, StoreBusy
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import Board, Entry, EventBans
-from ..models.views import AuditPage, Moderation
+from ..models.organiser_views import AuditPage, Moderation
 from ..stores.base import BoardChanged
 from .boards import EVENT_ID, BoardKeeper, racer_key
 from .paging import check_limit

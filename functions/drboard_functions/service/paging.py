@@ -1,19 +1,31 @@
-"""Reads that come a page at a time: their bounds and cursors."""
+"""The bounds of reads (the routes check them too), and the reads that come a page at a time:
+their cursors."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import TypeVar
+from typing import Protocol, TypeVar
 
 from ..errors import InvalidQuery
 from ..models.domain import MAX_PAGE
-from ..models.views import BoardList, RacerHistory
 from ..stores.base import BadPageToken
 
 DEFAULT_PAGE = 100
+#: Racers whose designs are compared at once.
+MAX_COMPARED = 4
+#: The fastest models insights look at: by default, and at most.
+DEFAULT_TOP, MAX_TOP = 5, 20
 
-P = TypeVar("P", BoardList, RacerHistory)
+
+class Page(Protocol):
+    """A page of a read: where the next one starts (None on the last)."""
+
+    @property
+    def next_cursor(self) -> str | None: ...
+
+
+P = TypeVar("P", bound=Page)
 
 
 def follow(read: Callable[[int, str | None], P]) -> Iterator[P]:

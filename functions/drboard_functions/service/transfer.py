@@ -18,6 +18,7 @@ from ..cursors import decode_export_cursor, decode_page_cursor, export_cursor, p
 from ..errors import BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import BOARD_ID_PATTERN, Board, RunPrint, Submission
+from ..models.organiser_views import FlaggedRun, RecheckPage
 from ..models.requests import ImportedSubmission
 from ..models.transfer import (
     ExportedBoard,
@@ -28,7 +29,7 @@ from ..models.transfer import (
     ImportReceipt,
     StoredSubmissionLine,
 )
-from ..models.views import BoardView, FlaggedRun, RecheckPage
+from ..models.views import BoardView
 from ..stores.base import RecordArchive, stored_record
 from ..views import board_view
 from .boards import BoardKeeper, check_belongs, default_board_id, live
