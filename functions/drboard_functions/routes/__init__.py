@@ -8,8 +8,9 @@ the routes, the validation, the error statuses and the OpenAPI document are the 
 - ``push_router`` (:mod:`.submissions`): a racer's submission and alias (IAM-signed in the
   cloud). ``pull_router``: the public reads (:mod:`.boards`) and the web pages (:mod:`.pages`).
   ``admin_router`` (:mod:`.organisers`): the organisers' routes (create, change, close, delete,
-  restore, export and import boards, moderation, audit), every one IAM-signed in the cloud and
-  answered by ``drboard serve`` only to the computer it runs on.
+  restore boards, moderation, audit, aliases; :mod:`.transfers`: export, import and recheck
+  boards), every one IAM-signed in the cloud and answered by ``drboard serve`` only to the
+  computer it runs on.
 - :mod:`.seasons`: the seasons' reads and pages (pull); :mod:`.season_changes`: the organisers'
   changes to seasons (admin).
 - :mod:`.params` holds what the routes share: the routers, the request parameters, who is
@@ -88,7 +89,8 @@ __all__ = [
 
 #: The modules whose routes each router holds: taking a router from this package imports them.
 ROUTE_MODULES = {"push_router": ("submissions",), "pull_router": ("boards", "pages", "results", "seasons"),
-                 "admin_router": ("organisers", "season_changes", "webhooks"), "card_router": ("cards",)}
+                 "admin_router": ("organisers", "transfers", "season_changes", "webhooks"),
+                 "card_router": ("cards",)}
 #: The module each other name of the package comes from.
 _HOMES = {"COGNITO_PREFIX": "app", "ERROR_STATUS": "app", "BoardResolver": "app", "build_app": "app",
           "canonical_event": "app", "error_body": "app", "error_headers": "app", "refusal": "app",
@@ -107,6 +109,10 @@ def __getattr__(name: str) -> Any:
     return getattr(import_module(f"{__name__}.{home}"), name)
 
 
+#: The last segment of the paths of a board's transfers' routes (:mod:`.transfers`).
+TRANSFER_ROUTES = ("export", "import", "imports", "recheck")
+
+
 def admin_routes_module(path: str) -> str:
     """The module of :data:`ROUTE_MODULES`' admin routes that answers ``path`` (a canonical
     path, as :func:`.app.canonical_event` makes it): the admin function loads only that module on
@@ -114,6 +120,8 @@ def admin_routes_module(path: str) -> str:
     parts = path.strip("/").split("/")
     if len(parts) > 2 and parts[0] in ("boards", "seasons") and parts[2] == "webhooks":
         return "webhooks"
+    if len(parts) == 3 and parts[0] == "boards" and parts[2] in TRANSFER_ROUTES:
+        return "transfers"
     if parts[0] == "seasons":
         return "season_changes"
     return "organisers"

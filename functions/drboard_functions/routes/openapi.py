@@ -9,8 +9,8 @@ from .app import build_app
 
 #: Every route module, in the order the document lists their routes (each router's routes in
 #: the order their modules register them).
-ROUTE_MODULES_IN_ORDER = ("boards", "cards", "organisers", "pages", "results", "seasons",
-                          "season_changes", "submissions", "webhooks")
+ROUTE_MODULES_IN_ORDER = ("boards", "cards", "organisers", "transfers", "pages", "results",
+                          "seasons", "season_changes", "submissions", "webhooks")
 
 _DEFAULT_422 = "#/components/schemas/HTTPValidationError"
 #: Every route's answer when the board's storage is busy or unreachable (nothing was written).

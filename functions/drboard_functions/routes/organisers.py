@@ -1,38 +1,31 @@
-"""The organisers' routes: boards, moderation, audit, export and import (IAM-signed in the
-cloud; answered by ``drboard serve`` only to the computer it runs on)."""
+"""The organisers' routes: boards, moderation, audit and aliases (IAM-signed in the cloud;
+answered by ``drboard serve`` only to the computer it runs on). A board's export, import and
+recheck are in :mod:`.transfers`."""
 
 from __future__ import annotations
 
-import json
 from http import HTTPStatus
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
-from aws_lambda_powertools.event_handler import Response, content_types
+from aws_lambda_powertools.event_handler import Response
 from aws_lambda_powertools.event_handler.openapi.params import Body, Query
-from drboard_assembler import limits
 
-from ..errors import InvalidQuery
-from ..models.domain import Board
 from ..models.organiser_views import (
     AliasList,
     AliasView,
     AuditPage,
     Moderation,
     RankCounters,
-    RecheckPage,
 )
-from ..models.requests import AliasAssignment, BoardChanges, BoardSpec, ImportedSubmission
-from ..models.transfer import ExportPage, ImportReceipt
+from ..models.requests import AliasAssignment, BoardChanges, BoardSpec
 from ..models.views import BoardView
 from .params import (
-    ADMIN_TAG,
+    ADMIN_ROUTE,
     ASSIGNMENT_BODY,
     BOARD_BODY,
     CHANGES_BODY,
     DEFAULT_LIMIT,
-    IMPORT_BODY,
-    IMPORT_HEADROOM_BYTES,
-    SIGV4,
+    NO_BOARD,
     BoardId,
     Cursor,
     Limit,
@@ -50,8 +43,6 @@ from .responses import json_answer, json_response
 BanScope = Annotated[Literal["event", "board"], Query(
     description="`event` (default): every board of the deployment; `board`: this board only.")]
 
-_ADMIN: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
-_NO_BOARD = "No such board (or it was deleted)."
 _DEFAULT_BOARD = ("The board is a track's default board, which keeps the default rules "
                   "(`BoardLocked`).")
 
@@ -70,7 +61,7 @@ _DEFAULT_BOARD = ("The board is a track's default board, which keeps the default
                  "closes before it opens, or a bad board id.",
             409: "A board with this id exists, or the id is a track's default board's "
                  "(`BoardExists`)."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(BOARD_BODY)
 def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
@@ -87,10 +78,10 @@ def create_board(spec: Annotated[BoardSpec, Body(description="The new board.")],
         json_response("The board as it is now.", BoardView), body=CHANGES_BODY, errors={
             400: "The title or method cleared, a window that closes before it opens, or a bad "
                  "board id.",
-            404: _NO_BOARD,
+            404: NO_BOARD,
             409: "The change would rescore entries already on the board, or the board is a "
                  "track's default board (`BoardLocked`)."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(CHANGES_BODY)
 def update_board(board: BoardId,
@@ -105,8 +96,8 @@ def update_board(board: BoardId,
     description="Pushes are refused from now on (`BoardClosed`); an upcoming board closes "
                 "without ever opening. Closing a closed board changes nothing.",
     responses=_admin_responses(json_response("The closed board.", BoardView),
-                               errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
-    **_ADMIN,
+                               errors={404: NO_BOARD, 409: _DEFAULT_BOARD}),
+    **ADMIN_ROUTE,
 )
 def close_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.close_board(segment(board), caller=organiser)
@@ -124,8 +115,8 @@ REBUILD_BUDGET_S = 5.0
                 "and says how far it got; ask again until `done` (a stopped build goes on where "
                 "it stopped). A board that has its counters answers `done` at once.",
     responses=_admin_responses(json_response("How far the build got.", RankCounters),
-                               errors={404: _NO_BOARD}),
-    **_ADMIN,
+                               errors={404: NO_BOARD}),
+    **ADMIN_ROUTE,
 )
 def rebuild_ranks(board: BoardId, service: Service, organiser: Organiser) -> RankCounters:
     return service.rebuild_ranks(segment(board), budget_s=REBUILD_BUDGET_S)
@@ -137,8 +128,8 @@ def rebuild_ranks(board: BoardId, service: Service, organiser: Organiser) -> Ran
     description="The board disappears from lists, pushes and reads; nothing is erased, and "
                 "`POST /boards/{board}/restore` brings it back whole.",
     responses=_admin_responses(json_response("The deleted board.", BoardView),
-                               errors={404: _NO_BOARD, 409: _DEFAULT_BOARD}),
-    **_ADMIN,
+                               errors={404: NO_BOARD, 409: _DEFAULT_BOARD}),
+    **ADMIN_ROUTE,
 )
 def delete_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.delete_board(segment(board), caller=organiser)
@@ -150,88 +141,10 @@ def delete_board(board: BoardId, service: Service, organiser: Organiser) -> Boar
     description="The board comes back with every entry and submission it had.",
     responses=_admin_responses(json_response("The restored board.", BoardView),
                                errors={404: "No such board."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def restore_board(board: BoardId, service: Service, organiser: Organiser) -> BoardView:
     return service.restore_board(segment(board), caller=organiser)
-
-
-@admin_router.get(
-    "/boards/<board>/export",
-    summary="Export a board, a page at a time",
-    description="The first page starts with the board; then come its entries in rank order, "
-                "then every submission with its record. Pass the answer's `next_cursor` as "
-                "`cursor` until it is null. Deleted boards export too.",
-    responses=_admin_responses(json_response("One page of the export.", ExportPage),
-                               errors={400: "A bad cursor or board id.", 404: "No such board."}),
-    **_ADMIN,
-)
-def export_board(board: BoardId, service: Service, organiser: Organiser,
-                 cursor: Cursor = None) -> Response[Any]:
-    page = service.export_page(segment(board), cursor or None)
-    # Each line as it serialises itself: a stored record goes out as it was stored, unparsed.
-    lines = ",".join(line.model_dump_json() for line in page.lines)
-    body = f'{{"lines":[{lines}],"next_cursor":{json.dumps(page.next_cursor)}}}'
-    return Response(status_code=HTTPStatus.OK, content_type=content_types.APPLICATION_JSON, body=body)
-
-
-@admin_router.put(
-    "/boards/<board>/import",
-    status_code=HTTPStatus.CREATED,
-    summary="Import a board from an export",
-    description="Creates the exported board (its `board_id` must be the path's) unless a board "
-                "with that id exists, whose own settings then stay: importing twice changes "
-                "nothing. Then replay its submissions with `POST /boards/{board}/imports`.",
-    responses=_admin_responses(
-        json_response("The board was created.", BoardView), ok_status=HTTPStatus.CREATED,
-        body=BOARD_BODY, errors={
-            400: "The body's `board_id` is not the path's, or is not a board id.",
-            404: "A deleted board has this id: restore it, or import under another id."},
-        also={200: json_response("A board with this id exists; it keeps its own settings and "
-                                  "nothing changed.", BoardView)}),
-    **_ADMIN,
-)
-@takes(BOARD_BODY)
-def import_board(board: BoardId,
-                 exported: Annotated[Board, Body(description="The `board` of an export's first line.")],
-                 service: Service, organiser: Organiser) -> Response[BoardView]:
-    board_id = segment(board)
-    if exported.board_id != board_id:
-        raise InvalidQuery(f"the body is board {exported.board_id!r} but the path names {board_id!r}",
-                           detail=[{"loc": "board_id", "msg": f"should be {board_id!r}",
-                                    "type": "value_error"}])
-    view, created = service.import_board(exported, caller=organiser)
-    return json_answer(HTTPStatus.CREATED if created else HTTPStatus.OK, view)
-
-
-@admin_router.post(
-    "/boards/<board>/imports",
-    status_code=HTTPStatus.CREATED,
-    summary="Replay one exported submission",
-    description="Stores the record as first submitted at `submitted_at`, scored by this board's "
-                "rules; the board's window and limits do not apply. Importing the same "
-                "submission twice changes nothing. The body is bounded at the record's bound plus "
-                f"{IMPORT_HEADROOM_BYTES} bytes, and its record at the record's own bound.",
-    responses=_admin_responses(
-        json_response("The submission was stored.", ImportReceipt), ok_status=HTTPStatus.CREATED,
-        body=IMPORT_BODY, errors={
-            404: _NO_BOARD,
-            413: f"The body is over {IMPORT_BODY.max_bytes} bytes, or its record over "
-                 f"{limits.MAX_RECORD_BYTES}.",
-            422: "The submission is not valid (field-level `detail`), or its run does not "
-                 "belong on this board (`BoardMismatch`)."},
-        also={200: json_response("The submission was already on the board; nothing changed.",
-                                  ImportReceipt)}),
-    **_ADMIN,
-)
-@takes(IMPORT_BODY)
-def import_submission(board: BoardId,
-                      item: Annotated[ImportedSubmission, Body(description="A submission line of "
-                                                                           "an export: its record "
-                                                                           "and `submitted_at`.")],
-                      service: Service, organiser: Organiser) -> Response[ImportReceipt]:
-    receipt = service.import_submission(segment(board), item, caller=organiser)
-    return json_answer(HTTPStatus.CREATED if receipt.status == "created" else HTTPStatus.OK, receipt)
 
 
 @admin_router.delete(
@@ -241,7 +154,7 @@ def import_submission(board: BoardId,
                 "recomputed without them. Their next push makes a new entry.",
     responses=_admin_responses(json_response("What the board now shows of the racer.", Moderation),
                                errors={404: "No such board, or the racer never pushed to it."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def remove_entry(board: BoardId, racer: RacerAlias, service: Service,
                  organiser: Organiser) -> Moderation:
@@ -256,8 +169,8 @@ def remove_entry(board: BoardId, racer: RacerAlias, service: Service,
                 "deployment) unless `scope=board`. Their entry comes off this board; their "
                 "submissions stay, and `DELETE` on the same path puts their best back.",
     responses=_admin_responses(json_response("The racer is banned.", Moderation),
-                               errors={404: _NO_BOARD}),
-    **_ADMIN,
+                               errors={404: NO_BOARD}),
+    **ADMIN_ROUTE,
 )
 def ban_racer(board: BoardId, racer: RacerAlias, service: Service, organiser: Organiser,
               scope: BanScope = "event") -> Moderation:
@@ -271,8 +184,8 @@ def ban_racer(board: BoardId, racer: RacerAlias, service: Service, organiser: Or
     description="The racer may push again (their bans on this board and across the event are "
                 "lifted), and their best submission is back on the board.",
     responses=_admin_responses(json_response("The racer is no longer banned.", Moderation),
-                               errors={404: _NO_BOARD}),
-    **_ADMIN,
+                               errors={404: NO_BOARD}),
+    **ADMIN_ROUTE,
 )
 def unban_racer(board: BoardId, racer: RacerAlias, service: Service,
                 organiser: Organiser) -> Moderation:
@@ -286,29 +199,11 @@ def unban_racer(board: BoardId, racer: RacerAlias, service: Service,
                 "who (`actor`), when, what. Pass `next_cursor` as `cursor` for the next page.",
     responses=_admin_responses(json_response("One page of the audit trail.", AuditPage),
                                errors={400: "A bad limit or cursor.", 404: "No such board."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def get_audit(board: BoardId, service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
               cursor: Cursor = None) -> AuditPage:
     return service.audit(segment(board), cursor or None, limit)
-
-
-@admin_router.post(
-    "/boards/<board>/recheck",
-    summary="Recheck a board's stored runs, a page at a time",
-    description="Indexes each stored run for copies and lookalikes (runs stored before the "
-                "index), and flags for the organiser the runs another racer pushed first or a "
-                "few milliseconds apart (`copied-run`, `near-copy`), aliases that could pass "
-                "for another racer's (`lookalike`) and records today's checks would refuse "
-                "(`rule-changed`). Nothing is refused or moved. Pass `next_cursor` as `cursor` "
-                "until it is null; again, it flags nothing new.",
-    responses=_admin_responses(json_response("One page of the recheck.", RecheckPage),
-                               errors={400: "A bad cursor or board id.", 404: _NO_BOARD}),
-    **_ADMIN,
-)
-def recheck_board(board: BoardId, service: Service, organiser: Organiser,
-                  cursor: Cursor = None) -> RecheckPage:
-    return service.recheck_page(segment(board), cursor or None, caller=organiser)
 
 
 # ---- aliases --------------------------------------------------------------------------------
@@ -321,7 +216,7 @@ def recheck_board(board: BoardId, service: Service, organiser: Organiser,
                 "while an organiser keeps it for its racer; `limit` at a time, by alias.",
     responses=_admin_responses(json_response("One page of aliases.", AliasList),
                                errors={400: "A bad limit or cursor."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def list_aliases(service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
                  cursor: Cursor = None) -> AliasList:
@@ -334,7 +229,7 @@ def list_aliases(service: Service, organiser: Organiser, limit: Limit = DEFAULT_
     description="Every reservation, assignment and release of an alias: who, when, what.",
     responses=_admin_responses(json_response("One page of the trail.", AuditPage),
                                errors={400: "A bad limit or cursor."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def alias_audit(service: Service, organiser: Organiser, limit: Limit = DEFAULT_LIMIT,
                 cursor: Cursor = None) -> AuditPage:
@@ -353,7 +248,7 @@ def alias_audit(service: Service, organiser: Organiser, limit: Limit = DEFAULT_L
             400: "The alias is not one a racer may take, or the principal is not a sign-in.",
             403: "Another sign-in holds the alias (`AliasTaken`): give `replace=true`. "
                  "Or the caller does not organise."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(ASSIGNMENT_BODY)
 def assign_alias(racer: RacerAlias,
@@ -369,7 +264,7 @@ def assign_alias(racer: RacerAlias,
                 "takes it, unless it has results, which only an organiser gives out.",
     responses=_admin_responses(json_response("The claim that was released.", AliasView),
                                errors={404: "No one holds the alias."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def release_alias(racer: RacerAlias, service: Service, organiser: Organiser) -> AliasView:
     return service.release_alias(segment(racer), caller=organiser)

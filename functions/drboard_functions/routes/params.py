@@ -45,6 +45,10 @@ IMPORT_HEADROOM_BYTES = 4 * limits.KIB
 SIGV4 = "sigv4"
 #: The tag of every organiser route: IAM-signed in the cloud, loopback only on `drboard serve`.
 ADMIN_TAG = "admin"
+#: What every organiser route declares: no CORS, the organisers' tag, IAM-signed requests.
+ADMIN_ROUTE: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
+#: An organiser route's 404.
+NO_BOARD = "No such board (or it was deleted)."
 
 #: The push function's routes (:mod:`.submissions`), the pull function's (:mod:`.boards`, :mod:`.pages`),
 #: the admin function's (:mod:`.organisers`) and the card function's (:mod:`.cards`).

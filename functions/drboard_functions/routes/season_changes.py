@@ -5,7 +5,7 @@ runs on). Every change answers the season with its standings, as a read would.""
 from __future__ import annotations
 
 from http import HTTPStatus
-from typing import Annotated, Any
+from typing import Annotated
 
 from aws_lambda_powertools.event_handler import Response
 from aws_lambda_powertools.event_handler.openapi.params import Body
@@ -14,9 +14,8 @@ from aws_lambda_powertools.event_handler.openapi.types import OpenAPIResponse
 from ..errors import InvalidQuery
 from ..models.seasons import FinalSpec, RoundSpec, SeasonChanges, SeasonSpec, SeasonStandings
 from .params import (
-    ADMIN_TAG,
+    ADMIN_ROUTE,
     MAX_BOARD_BODY_BYTES,
-    SIGV4,
     BoardId,
     Organiser,
     RequestBody,
@@ -35,7 +34,6 @@ ROUND_BODY = RequestBody("round", 1024, InvalidQuery)
 FINAL_BODY = RequestBody("final", 1024, InvalidQuery)
 
 # One tag each: Powertools keeps an operation's tags in a set, so two would come out in any order.
-_ADMIN: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
 _NO_SEASON = "No such season."
 _CLOSED = ("The season is closed (reopen it first), or another organiser changed it meanwhile "
            "(`SeasonLocked`).")
@@ -58,7 +56,7 @@ def _standings(description: str) -> OpenAPIResponse:
     responses=_admin_responses(_standings("The season was created."), ok_status=HTTPStatus.CREATED,
                                body=SEASON_BODY,
                                errors={409: "A season with this id exists (`SeasonExists`)."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(SEASON_BODY)
 def create_season(spec: Annotated[SeasonSpec, Body(description="The new season.")],
@@ -74,7 +72,7 @@ def create_season(spec: Annotated[SeasonSpec, Body(description="The new season."
     responses=_admin_responses(_standings("The season as it is now."), body=SEASON_CHANGES_BODY,
                                errors={400: "The title or points table cleared.",
                                        404: _NO_SEASON, 409: _CLOSED}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(SEASON_CHANGES_BODY)
 def update_season(season: SeasonId,
@@ -92,7 +90,7 @@ def update_season(season: SeasonId,
     responses=_admin_responses(_standings("The season with the round."), body=ROUND_BODY,
                                errors={400: "A season has at most 30 rounds, or a bad id.",
                                        404: "No such season, or no such board.", 409: _CLOSED}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(ROUND_BODY)
 def put_round(season: SeasonId, board: BoardId,
@@ -110,7 +108,7 @@ def put_round(season: SeasonId, board: BoardId,
                                errors={404: "No such season, or the board is not one of its rounds.",
                                        409: _CLOSED + " Or the final takes its entrants from "
                                                       "this round."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def delete_round(season: SeasonId, board: BoardId, service: Service,
                  organiser: Organiser) -> SeasonStandings:
@@ -129,7 +127,7 @@ def delete_round(season: SeasonId, board: BoardId, service: Service,
         errors={400: "`from_round` is not a round of the season.",
                 404: "No such season, or no such board.",
                 409: _CLOSED + " Or the board is a track's default board (`BoardLocked`)."}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(FINAL_BODY)
 def put_final(season: SeasonId, spec: Annotated[FinalSpec, Body(description="The final.")],
@@ -143,7 +141,7 @@ def put_final(season: SeasonId, spec: Annotated[FinalSpec, Body(description="The
     description="The season has no final: its board takes anyone's pushes again.",
     responses=_admin_responses(_standings("The season without a final."),
                                errors={404: _NO_SEASON, 409: _CLOSED}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def delete_final(season: SeasonId, service: Service, organiser: Organiser) -> SeasonStandings:
     return service.clear_final(segment(season))
@@ -155,7 +153,7 @@ def delete_final(season: SeasonId, service: Service, organiser: Organiser) -> Se
     description="The season's standings stay as they are now, whatever later happens to its "
                 "boards; it is listed as past. Closing a closed season changes nothing.",
     responses=_admin_responses(_standings("The closed season."), errors={404: _NO_SEASON}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def close_season(season: SeasonId, service: Service, organiser: Organiser) -> SeasonStandings:
     return service.close_season(segment(season))
@@ -166,7 +164,7 @@ def close_season(season: SeasonId, service: Service, organiser: Organiser) -> Se
     summary="Reopen a closed season",
     description="Its boards move its standings again, and it may change.",
     responses=_admin_responses(_standings("The reopened season."), errors={404: _NO_SEASON}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def reopen_season(season: SeasonId, service: Service, organiser: Organiser) -> SeasonStandings:
     return service.reopen_season(segment(season))

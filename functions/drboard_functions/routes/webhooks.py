@@ -13,8 +13,9 @@ from aws_lambda_powertools.event_handler.openapi.params import Body, Path
 
 from ..errors import InvalidQuery
 from ..models.notices import Delivery, WebhookList, WebhookSpec, WebhookView
-from .organisers import _ADMIN, _NO_BOARD
 from .params import (
+    ADMIN_ROUTE,
+    NO_BOARD,
     BoardId,
     Organiser,
     RequestBody,
@@ -47,8 +48,8 @@ _NO_SEASON_WEBHOOK = "No such season, or no such webhook of it (`WebhookNotFound
     responses=_admin_responses(
         json_response("The webhook was added.", WebhookView), ok_status=HTTPStatus.CREATED,
         body=WEBHOOK_BODY, errors={400: "A bad board id, or the board has 10 webhooks already.",
-                                   404: _NO_BOARD}),
-    **_ADMIN,
+                                   404: NO_BOARD}),
+    **ADMIN_ROUTE,
 )
 @takes(WEBHOOK_BODY)
 def add_webhook(board: BoardId, spec: Annotated[WebhookSpec, Body(description="The webhook.")],
@@ -62,8 +63,8 @@ def add_webhook(board: BoardId, spec: Annotated[WebhookSpec, Body(description="T
     description="Each webhook with its URL cut short, the events it hears, and how its last "
                 "delivery went (`last_sent_at`, or `last_error` and `last_error_at`).",
     responses=_admin_responses(json_response("The board's webhooks.", WebhookList),
-                               errors={404: _NO_BOARD}),
-    **_ADMIN,
+                               errors={404: NO_BOARD}),
+    **ADMIN_ROUTE,
 )
 def list_webhooks(board: BoardId, service: Service, organiser: Organiser) -> WebhookList:
     return service.webhooks(segment(board))
@@ -74,7 +75,7 @@ def list_webhooks(board: BoardId, service: Service, organiser: Organiser) -> Web
     summary="Remove a chat webhook",
     responses=_admin_responses(json_response("The removed webhook.", WebhookView),
                                errors={404: _NO_WEBHOOK}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def remove_webhook(board: BoardId, webhook: WebhookId, service: Service,
                    organiser: Organiser) -> WebhookView:
@@ -88,7 +89,7 @@ def remove_webhook(board: BoardId, webhook: WebhookId, service: Service,
                 "whether the service took it; the webhook's `last_error` says why not.",
     responses=_admin_responses(json_response("What the test did.", Delivery),
                                errors={404: _NO_WEBHOOK}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def test_webhook(board: BoardId, webhook: WebhookId, service: Service, organiser: Organiser,
                  request: Request) -> Delivery:
@@ -113,7 +114,7 @@ def test_webhook(board: BoardId, webhook: WebhookId, service: Service, organiser
         json_response("The webhook was added.", WebhookView), ok_status=HTTPStatus.CREATED,
         body=WEBHOOK_BODY, errors={400: "A bad season id, or the season has 10 webhooks already.",
                                    404: _NO_SEASON}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 @takes(WEBHOOK_BODY)
 def add_season_webhook(season: SeasonId, spec: Annotated[WebhookSpec, Body(description="The webhook.")],
@@ -129,7 +130,7 @@ def add_season_webhook(season: SeasonId, spec: Annotated[WebhookSpec, Body(descr
                 "delivery went.",
     responses=_admin_responses(json_response("The season's webhooks.", WebhookList),
                                errors={404: _NO_SEASON}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def list_season_webhooks(season: SeasonId, service: Service, organiser: Organiser) -> WebhookList:
     return service.webhooks(segment(season), kind="season")
@@ -140,7 +141,7 @@ def list_season_webhooks(season: SeasonId, service: Service, organiser: Organise
     summary="Remove a season's chat webhook",
     responses=_admin_responses(json_response("The removed webhook.", WebhookView),
                                errors={404: _NO_SEASON_WEBHOOK}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def remove_season_webhook(season: SeasonId, webhook: WebhookId, service: Service,
                           organiser: Organiser) -> WebhookView:
@@ -154,7 +155,7 @@ def remove_season_webhook(season: SeasonId, webhook: WebhookId, service: Service
                 "webhook's `last_error` says why not.",
     responses=_admin_responses(json_response("What the test did.", Delivery),
                                errors={404: _NO_SEASON_WEBHOOK}),
-    **_ADMIN,
+    **ADMIN_ROUTE,
 )
 def test_season_webhook(season: SeasonId, webhook: WebhookId, service: Service, organiser: Organiser,
                         request: Request) -> Delivery:
