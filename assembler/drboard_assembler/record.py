@@ -244,8 +244,8 @@ class ActionSpace(Strict):
         if self.type == "discrete":
             if not self.actions:
                 raise ValueError("a discrete action space needs at least one action")
-            speed = max(a.speed for a in self.actions)
-            steering = max(abs(a.steering_angle) for a in self.actions)
+            speed = max([a.speed for a in self.actions])  # (lists: every record read checks)
+            steering = max([abs(a.steering_angle) for a in self.actions])
         else:
             if self.speed is None or self.steering_angle is None:
                 raise ValueError("a continuous action space needs speed and steering_angle ranges")
