@@ -26,6 +26,7 @@ from pydantic import (
     ValidationInfo,
     model_validator,
 )
+from pydantic_core import from_json
 
 from . import limits
 from .aliases import alias_problem, text_problem, texts
@@ -481,7 +482,21 @@ def content_hash(record: Record) -> str:
     submission id and assembler version, and without the later fields it leaves empty."""
     # Python's dump, not pydantic's JSON mode: the record holds no value the two write apart
     # (text, numbers, booleans, lists; its enums are text), and it is the faster by a third.
-    content = record.model_dump(exclude=_NOT_CONTENT)
+    return _hash_of(record.model_dump(exclude=_NOT_CONTENT))
+
+
+def json_content_hash(record_json: str) -> str:
+    """:func:`content_hash` of the record this JSON (a valid record's) holds, read without
+    building the record, in half the time: the same hash for the JSON a record writes of itself.
+    Other JSON of the same record (``9100.0`` for ``9100``) may hash otherwise: where the two
+    disagree, the record's own hash decides."""
+    content = from_json(record_json)
+    for name in _NOT_CONTENT:
+        content.pop(name, None)
+    return _hash_of(content)
+
+
+def _hash_of(content: dict[str, Any]) -> str:
     _drop_empty(content["design"], _LATER_DESIGN_FIELDS)
     for run in content["evaluations"]:
         _drop_empty(run, _LATER_RUN_FIELDS)

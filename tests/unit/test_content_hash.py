@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,7 @@ from drboard_assembler.record import (
     Lap,
     Record,
     content_hash,
+    json_content_hash,
 )
 
 from tests.recordkit import make_record
@@ -91,6 +93,21 @@ def records() -> list[Record]:
 @pytest.mark.parametrize("record", records(), ids=lambda record: f"{record.racer}/{record.model_name}")
 def test_the_hash_of_a_record_is_that_of_the_formula(record: Record) -> None:
     assert content_hash(record) == formula(record)
+
+
+@pytest.mark.parametrize("record", records(), ids=lambda record: f"{record.racer}/{record.model_name}")
+def test_the_json_a_record_writes_of_itself_hashes_as_the_record(record: Record) -> None:
+    """An import hashes a record's JSON as the board stores it, without building the record."""
+    assert json_content_hash(record.model_dump_json()) == content_hash(record)
+
+
+def test_json_that_writes_a_value_otherwise_may_hash_otherwise() -> None:
+    """Whole numbers written without their ``.0`` are the same record, not the same text: the
+    JSON's hash differs, and an import settles it with the record's own (test_import_lines)."""
+    plain = make_record("Ada", [(9100, 100)])
+    rewritten = re.sub(r'"speed":(\d+)\.0\b', r'"speed":\1', plain.model_dump_json())
+    assert Record.model_validate_json(rewritten, context={"stored": True}) == plain
+    assert json_content_hash(rewritten) != content_hash(plain)
 
 
 def test_designs_that_differ_only_in_a_value_s_type_hash_apart() -> None:

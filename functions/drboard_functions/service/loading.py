@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 from drboard_assembler.aliases import confusable_skeleton
 from drboard_assembler.limits import MAX_RECORD_BYTES
-from drboard_assembler.record import Record, content_hash
+from drboard_assembler.record import Record, content_hash, json_content_hash
 
 from .. import ranking
 from ..errors import InvalidSubmission, StoreBusy
@@ -81,10 +81,12 @@ def prepare_submission(board: Board, record: Record, submitted_at: datetime,
     stores the record as ``record_json``, the JSON it was read from, when given and within the
     record's bound (else as the record writes itself out)."""
     check_belongs(record, board)
-    if record_json is None or len(record_json) > MAX_RECORD_BYTES:
-        record_json = record.model_dump_json()
-    stored = check_record_json_size(record_json)
-    if content_hash(record) != record.submission_id:
+    given = record_json if record_json is not None and len(record_json) <= MAX_RECORD_BYTES else None
+    stored = check_record_json_size(given or record.model_dump_json())
+    # The hash of the JSON stored, as it is; the record's own where that JSON writes a value
+    # otherwise than the record does (the record's content is what its id names).
+    if ((given is None or json_content_hash(given) != record.submission_id)
+            and content_hash(record) != record.submission_id):
         raise InvalidSubmission("the record's submission_id does not match its content",
                                 detail=[{"loc": "record.submission_id", "type": "value_error",
                                          "msg": "does not match the record's content"}])
