@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Literal, Protocol, TypeVar
 
 if TYPE_CHECKING:  # the protocol's types, not needed to run: `drboard --help` imports no model
     from drboard_assembler.record import Record
+    from drboard_functions.cursors import Paged
     from drboard_functions.models.domain import Board
     from drboard_functions.models.notices import (
         Delivery,
@@ -104,12 +105,7 @@ class BoardClient(Protocol):
     def reopen_season(self, season_id: str) -> SeasonStandings: ...
 
 
-class Paged(Protocol):
-    @property
-    def next_cursor(self) -> str | None: ...
-
-
-PageT = TypeVar("PageT", bound=Paged)
+PageT = TypeVar("PageT", bound="Paged")
 
 
 def every_page(fetch: Callable[[str | None], PageT]) -> Iterator[PageT]:

@@ -7,7 +7,7 @@ import base64
 import binascii
 import json
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from .errors import InvalidQuery
 
@@ -17,6 +17,13 @@ MAX_PAGE = 500
 MAX_CURSOR_CHARS = 1024
 NOT_OURS = "the cursor is not one this board gave out"
 EXPORT_PARTS = ("entries", "submissions")
+
+
+class Paged(Protocol):
+    """A page of a read: the cursor of the next one (None on the last)."""
+
+    @property
+    def next_cursor(self) -> str | None: ...
 
 
 def _encode(fields: list[Any]) -> str:

@@ -45,7 +45,8 @@ IMPORT_HEADROOM_BYTES = 4 * limits.KIB
 SIGV4 = "sigv4"
 #: The tag of every organiser route: IAM-signed in the cloud, loopback only on `drboard serve`.
 ADMIN_TAG = "admin"
-#: What every organiser route declares: no CORS, the organisers' tag, IAM-signed requests.
+#: What every organiser route declares: no CORS, the organisers' tag, IAM-signed requests. One
+#: tag only: Powertools keeps an operation's tags in a set, so two would come out in any order.
 ADMIN_ROUTE: dict[str, Any] = {"cors": False, "tags": [ADMIN_TAG], "security": [{SIGV4: []}]}
 #: An organiser route's 404.
 NO_BOARD = "No such board (or it was deleted)."

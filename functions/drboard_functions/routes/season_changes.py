@@ -33,7 +33,6 @@ SEASON_CHANGES_BODY = RequestBody("changes", MAX_BOARD_BODY_BYTES, InvalidQuery)
 ROUND_BODY = RequestBody("round", 1024, InvalidQuery)
 FINAL_BODY = RequestBody("final", 1024, InvalidQuery)
 
-# One tag each: Powertools keeps an operation's tags in a set, so two would come out in any order.
 _NO_SEASON = "No such season."
 _CLOSED = ("The season is closed (reopen it first), or another organiser changed it meanwhile "
            "(`SeasonLocked`).")

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Protocol, TypeVar
+from typing import TypeVar
 
+from ..cursors import Paged
 from ..errors import InvalidQuery
 from ..models.domain import MAX_PAGE
 from ..stores.base import BadPageToken
@@ -17,15 +18,7 @@ MAX_COMPARED = 4
 #: The fastest models insights look at: by default, and at most.
 DEFAULT_TOP, MAX_TOP = 5, 20
 
-
-class Page(Protocol):
-    """A page of a read: where the next one starts (None on the last)."""
-
-    @property
-    def next_cursor(self) -> str | None: ...
-
-
-P = TypeVar("P", bound=Page)
+P = TypeVar("P", bound=Paged)
 
 
 def follow(read: Callable[[int, str | None], P]) -> Iterator[P]:
