@@ -55,10 +55,12 @@ def item(record: Record, minutes: int) -> ImportedSubmission:
 
 
 #: An export's submissions, in its order (by submission id, not by time): copies whose first
-#: author comes later in the file, a near-copy, lookalike aliases, a run already on another
-#: board (pushed there later, and earlier), a racer bettering and worsening, a duplicate.
+#: author comes later in the file, near-copies (one whose first author comes later in the file,
+#: two pushed at the same moment), lookalike aliases, a run already on another board (pushed there
+#: later, and earlier), a racer bettering and worsening, a duplicate.
 ITEMS = [
     item(BOB, 10),
+    item(make_record("Quick", [(10402, 100), (10503, 100), (10598, 100)]), 25),  # after Swift's
     item(make_record("Ada", [(9900, 100), (9950, 100), (9990, 100)], model="slow"), 1),
     item(copy_of(BOB, "Copycat"), 5),  # pushed before Bob: Bob's is the copy
     item(ADA_FAST, 20),
@@ -74,6 +76,9 @@ ITEMS = [
     item(make_record("TieA", [(9600, 100), (9610, 100), (9620, 100)]), 7),
     item(copy_of(make_record("TieA", [(9600, 100), (9610, 100), (9620, 100)]), "TieB"), 7),
     item(make_record("Bob", [(9100, 100), (9300, 100), (9500, 100)], model="again"), 4),
+    item(make_record("Tick", [(10800, 100), (10900, 100), (11000, 100)]), 9),
+    item(make_record("Tock", [(10803, 100), (10902, 100), (10998, 100)]), 9),
+    item(make_record("Swift", [(10400, 100), (10500, 100), (10600, 100)]), 12),
 ]
 
 
@@ -165,6 +170,8 @@ def test_an_import_in_bulk_writes_what_replaying_it_writes(tmp_path: Path, kind:
     flagged = {racer: flags for racer, _, flags, _ in expected["entries"][FINALS] if flags}
     assert flagged["Copycat"] == ["copied-run"] and "Bob" not in flagged, "Bob pushed it first"
     assert flagged["Nearly"] == ["near-copy"]
+    assert flagged["Quick"] == ["near-copy"] and "Swift" not in flagged, "Swift pushed first"
+    assert flagged["Tick"] == flagged["Tock"] == ["near-copy"], "pushed at the same moment"
     assert "lookalike" in flagged["0llie"] and flagged["Thief"] == ["copied-run"]
     assert flagged["TieA"] == flagged["TieB"] == ["copied-run"], "pushed at the same moment"
     assert expected["entries"][TRACK][0][2] == ["copied-run"], "the veteran's run, copied earlier"
@@ -213,9 +220,9 @@ def store_order(run: NearRun) -> tuple[int, str, str, str]:
     return run.laps_ms[0], run.fingerprint, run.racer_key, run.board_id
 
 
-def test_a_lane_finds_the_near_copy_looking_at_every_run_finds() -> None:
+def test_a_lane_finds_the_near_copies_looking_at_every_run_finds() -> None:
     """A lane keeps its runs by cells of their best and slowest laps: a run finds there what
-    looking at every run finds, the first in the store's order."""
+    looking at every run finds, in the store's order."""
     rng = random.Random(7)
     runs = sorted((near_run(rng, n) for n in range(600)), key=store_order)
     lane = _Lane(runs)
@@ -224,11 +231,11 @@ def test_a_lane_finds_the_near_copy_looking_at_every_run_finds() -> None:
         kept.setdefault(store_order(run), run)
     for probe in (near_run(rng, n) for n in range(1000, 1400)):
         laps = tuple(probe.laps_ms)
-        first = min((run for run in kept.values() if run.racer_key != probe.racer_key
-                     and run.fingerprint != probe.fingerprint and same_laps(list(laps), run.laps_ms)),
-                    key=store_order, default=None)
-        found = lane.copied(probe.fingerprint, probe.racer_key, laps)
-        assert (found[3] if found else None) == (first.submission_id if first else None)
+        every = sorted((run for run in kept.values() if run.racer_key != probe.racer_key
+                        and run.fingerprint != probe.fingerprint
+                        and same_laps(list(laps), run.laps_ms)), key=store_order)
+        found = lane.near(probe.fingerprint, probe.racer_key, laps)
+        assert [run[3] for run in found] == [run.submission_id for run in every]
 
 
 @pytest.mark.parametrize(("laps", "near"), [
@@ -239,4 +246,4 @@ def test_laps_near_ms_apart_meet_across_a_cell_s_edge(laps: tuple[int, ...], nea
     assert NEAR_MS == 5
     lane = _Lane([NearRun(fingerprint="x", racer_key="a", board_id="b", submission_id="s",
                           laps_ms=[9999, 10010, 10020])])
-    assert (lane.copied("y", "c", laps) is not None) is near
+    assert bool(lane.near("y", "c", laps)) is near

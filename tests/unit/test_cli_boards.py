@@ -17,6 +17,8 @@ from drboard_functions.service import LeaderboardService
 from drboard_functions.service import transfer as transfer_module
 from drboard_functions.stores.sqlite import SqliteStore
 
+from tests.downloadkit import drfc_folder
+
 EXAMPLES = sorted(p for p in (Path(__file__).parents[2] / "examples").iterdir() if p.is_dir())
 COUNTER_CLOCKWISE = [p for p in EXAMPLES if not p.name.endswith("-cw")]
 T0 = datetime(2026, 3, 1, 12, 0, tzinfo=UTC)
@@ -500,6 +502,28 @@ def test_importing_twice_changes_nothing(drboard: Drboard, other_board: Drboard,
     assert f"0 submissions imported, {len(COUNTER_CLOCKWISE) + 1} already there" in out
     assert other_board.json("pull", "--track", "reInvent2019") == before
     assert drboard.ok("import", exported).count("0 submissions imported") == 1, "into its own board"
+
+
+#: Two runs 3 ms a lap apart: (racer, lap time).
+NEAR_RUNS = [("Ada", 38100), ("Bob", 38103)]
+
+
+@pytest.mark.parametrize("pushed", [NEAR_RUNS, NEAR_RUNS[::-1]], ids=["Ada first", "Bob first"])
+def test_an_import_flags_the_near_copy_the_board_flagged(drboard: Drboard, other_board: Drboard,
+                                                         clock: Clock, tmp_path: Path,
+                                                         pushed: list[tuple[str, int]]) -> None:
+    """Of two runs a few milliseconds apart, the one pushed later is the near-copy. An export
+    lists its submissions by id, not by time (so one of the two orders lists the near-copy
+    first), and a recheck reads them so too: both still flag the one pushed later."""
+    for racer, lap_ms in pushed:
+        drboard.ok("push", drfc_folder(tmp_path / racer, lap_ms), "--racer", racer)
+        clock.advance(minutes=5)
+    other_board.ok("import", export_file(drboard, tmp_path, "Spain_track"))
+    drboard.ok("board", "recheck", "Spain_track")
+    (first, _), (later, _) = pushed
+    for board in (drboard, other_board):
+        assert board.json("history", "--racer", first)[0]["flags"] == []
+        assert board.json("history", "--racer", later)[0]["flags"] == ["near-copy"]
 
 
 def test_a_named_board_moves_with_its_settings(drboard: Drboard, other_board: Drboard,

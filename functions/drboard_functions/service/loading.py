@@ -198,9 +198,9 @@ class _Lane:
             self.keys.add(key)
             self.cells.setdefault((laps[0] // CELL_MS, laps[-1] // CELL_MS), []).append(run)
 
-    def copied(self, fingerprint: str, racer_key: str, laps: tuple[int, ...]) -> NearTuple | None:
-        """Another racer's run whose laps are each within NEAR_MS of these, the first in the
-        order the store reads them (by best lap, fingerprint, racer and board), or None."""
+    def near(self, fingerprint: str, racer_key: str, laps: tuple[int, ...]) -> list[NearTuple]:
+        """Other racers' runs whose laps are each within NEAR_MS of these, in the order the
+        store reads them (by best lap, fingerprint, racer and board)."""
         best, slowest = laps[0], laps[-1]
         rows, columns = _cells_near(best), _cells_near(slowest)
         found = [run for row in rows for column in columns
@@ -208,7 +208,7 @@ class _Lane:
                  if abs(run[4][0] - best) <= NEAR_MS and abs(run[4][-1] - slowest) <= NEAR_MS
                  and len(run[4]) == len(laps) and run[1] != racer_key and run[0] != fingerprint
                  and same_laps(list(laps), list(run[4]))]
-        return min(found, key=lambda run: (run[4][0], run[0], run[1], run[2])) if found else None
+        return sorted(found, key=lambda run: (run[4][0], run[0], run[1], run[2]))
 
 
 def _cells_near(ms: int) -> tuple[int, ...]:
@@ -264,14 +264,11 @@ class _Replay:
         elif holder != racer_key:
             self._flag((self.board_id, racer_key, submission_id), prepared.racer,
                        LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
-        for fingerprint, lane, laps in prepared.runs:  # its copies, and a near-copy it is
+        for fingerprint, lane, laps in prepared.runs:  # its copies and near-copies
             if len(self.authors[fingerprint]) > 1:
                 self._flag_copies(self.authors[fingerprint])
-            if laps:
-                near = self.load.lane(lane).copied(fingerprint, racer_key, laps)
-                if near is not None:
-                    self._flag((self.board_id, racer_key, submission_id), prepared.racer,
-                               NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
+            for near in self.load.lane(lane).near(fingerprint, racer_key, laps) if laps else ():
+                self._flag_near_copy(prepared, fingerprint, near)
 
     def _index(self, row: ImportedRow, fingerprint: str, lane: str,
                laps: tuple[int, ...] | None) -> None:
@@ -299,6 +296,29 @@ class _Replay:
         for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
             self._flag((board_id, racer, submission_id), None, COPIED,
                        f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
+
+    def _flag_near_copy(self, prepared: PreparedSubmission, fingerprint: str,
+                        near: NearTuple) -> None:
+        """As ``Transfer._near_copies``: of two runs a few milliseconds apart, the one pushed
+        later is the near-copy (both, pushed at the same moment), whatever the file's order."""
+        row = prepared.row
+        mine = self.authors[fingerprint][row.racer_key][0]
+        theirs = self._first_at(near[0], near[1])
+        if theirs is None or theirs <= mine:
+            self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+                       NEAR_COPY, f"laps within {NEAR_MS} ms of {near[1]!r}'s on {near[2]!r}")
+        if theirs is not None and theirs >= mine:
+            self._flag((near[2], near[1], near[3]), None, NEAR_COPY,
+                       f"laps within {NEAR_MS} ms of {row.racer_key!r}'s on {self.board_id!r}")
+
+    def _first_at(self, fingerprint: str, racer_key: str) -> str | None:
+        """When the racer first pushed the run (as a timestamp), or None if unknown."""
+        authors = self.authors.get(fingerprint)
+        if authors is None:  # a run of no submission of this batch: the store's are current
+            authors = {a.racer_key: (ranking.timestamp(a.first_at), a.board_id, a.submission_id)
+                       for a in self.load.store.authors_of([fingerprint]).get(fingerprint, ())}
+        mine = authors.get(racer_key)
+        return mine[0] if mine else None
 
     def _flag(self, where: Where, racer: str | None, flag: str, why: str) -> None:
         """Flag a run once: this batch's when it writes it, another's after the batch."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from datetime import datetime
 
 from drboard_assembler.aliases import confusable_skeleton
 from drboard_assembler.record import Record
@@ -17,7 +18,7 @@ from pydantic import ValidationError
 from ..cursors import decode_export_cursor, decode_page_cursor, export_cursor, page_cursor
 from ..errors import BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
-from ..models.domain import BOARD_ID_PATTERN, Board, RunPrint, Submission
+from ..models.domain import BOARD_ID_PATTERN, Board, NearRun, RunAuthor, RunPrint, Submission
 from ..models.organiser_views import FlaggedRun, RecheckPage
 from ..models.requests import ImportedSubmission
 from ..models.transfer import (
@@ -195,11 +196,29 @@ class Transfer:
                     flagged += self._flag(other, COPIED, f"the same laps as {first.racer_key!r}'s "
                                           f"on {first.board_id!r}, pushed first", caller)
         if run.laps_ms:
+            mine = _first_at(authors, submission.racer_key) or submission.submitted_at
             for near in self.store.near_runs(run.lane, run.laps_ms[0], NEAR_MS):
                 if (near.racer_key != submission.racer_key and near.fingerprint != run.fingerprint
                         and same_laps(run.laps_ms, near.laps_ms)):
-                    flagged += self._flag(submission, NEAR_COPY, f"laps within {NEAR_MS} ms of "
-                                          f"{near.racer_key!r}'s on {near.board_id!r}", caller)
+                    flagged += self._near_copies(submission, mine, near, caller)
+        return flagged
+
+    def _near_copies(self, submission: Submission, mine: datetime, near: NearRun,
+                     caller: Caller) -> list[FlaggedRun]:
+        """Of two runs a few milliseconds apart, the one pushed later is the near-copy; pushed
+        at the same moment, both are. (``mine``: when this submission's racer first pushed
+        its run.)"""
+        theirs = _first_at(self.store.run_authors(near.fingerprint), near.racer_key)
+        flagged: list[FlaggedRun] = []
+        if theirs is None or theirs <= mine:
+            flagged += self._flag(submission, NEAR_COPY, f"laps within {NEAR_MS} ms of "
+                                  f"{near.racer_key!r}'s on {near.board_id!r}", caller)
+        if theirs is not None and theirs >= mine:
+            other = self.store.get_submission(near.board_id, near.racer_key, near.submission_id)
+            if other is not None:
+                flagged += self._flag(other, NEAR_COPY, f"laps within {NEAR_MS} ms of "
+                                      f"{submission.racer_key!r}'s on {submission.board_id!r}",
+                                      caller)
         return flagged
 
     def _flag(self, submission: Submission, flag: str, why: str, caller: Caller) -> list[FlaggedRun]:
@@ -211,6 +230,10 @@ class Transfer:
                           submission_id=submission.submission_id, detail=f"{flag}: {why}")
         return [FlaggedRun(board_id=submission.board_id, racer=submission.racer,
                            submission_id=submission.submission_id, flag=flag, why=why)]
+
+
+def _first_at(authors: list[RunAuthor], racer_key: str) -> datetime | None:
+    return next((author.first_at for author in authors if author.racer_key == racer_key), None)
 
 
 def _importable(board: Board) -> Board:
