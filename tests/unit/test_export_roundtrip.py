@@ -1,8 +1,9 @@
 """An export imported into a new board shows what the exported board showed: its standings and
 every racer's history with its flags, for boards of many rules and pushes (copies and near-copies
 pushed by the organiser, off-track laps, racers pushing again), in bulk on the embedded board and
-one submission at a time on DynamoDB. The export lists submissions by id, not in the order they
-were pushed: the import must not read that order as the pushes' order."""
+one submission at a time on SQLite and DynamoDB; and a recheck of those boards finds nothing
+more to flag. An export and a recheck list submissions by id, not in the order they were pushed:
+neither may read that order as the pushes' order."""
 
 from __future__ import annotations
 
@@ -117,3 +118,20 @@ def test_an_export_imported_into_dynamodb_shows_what_its_board_showed(seed: int,
                                      clock=Clock())
         one_at_a_time(service, export)
         assert shown(service) == expected
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_a_recheck_of_a_board_its_pushes_checked_flags_nothing_new(seed: int, tmp_path: Path) -> None:
+    """Every run of these boards was checked for copies when it was pushed: a recheck, which
+    reads them by id, finds nothing more to flag (the first of two near runs included)."""
+    clock = Clock()
+    service = LeaderboardService(SqliteStore(tmp_path / "board.db"), clock=clock)
+    pushed_board(service, clock, random.Random(seed))
+    before = shown(service)
+    page = service.recheck_page(BOARD)
+    flagged = list(page.flagged)
+    while page.next_cursor is not None:
+        page = service.recheck_page(BOARD, page.next_cursor)
+        flagged += page.flagged
+    assert flagged == []
+    assert shown(service) == before
