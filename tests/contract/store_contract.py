@@ -784,6 +784,8 @@ class StoreContract(SeasonStoreContract):
         again = store.import_batch(TRACK, batch)
         assert again == ImportWritten(created=0, improved=0)
         assert participants(store) == 3
+        store.hand_over_skeleton(TRACK, "ada", "bob")
+        assert store.holders(TRACK, [], ["ada", "bob"]) == ({}, {"ada": "bob"})
 
     def test_an_import_batch_indexes_runs_for_near_copies(self, store: BoardStore) -> None:
         board = make_board()

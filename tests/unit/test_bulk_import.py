@@ -14,7 +14,8 @@ from typing import Any
 import boto3
 import pytest
 from drboard_assembler.record import Record
-from drboard_functions.errors import BoardMismatch, InvalidSubmission, SubmissionTooLarge
+from drboard_functions.errors import AliasTaken, BoardMismatch, InvalidSubmission, SubmissionTooLarge
+from drboard_functions.identity import Caller
 from drboard_functions.models.domain import Board, NearRun
 from drboard_functions.models.requests import BoardSpec, ImportedSubmission
 from drboard_functions.service import LeaderboardService, racer_key
@@ -56,11 +57,13 @@ def item(record: Record, minutes: int) -> ImportedSubmission:
 
 #: An export's submissions, in its order (by submission id, not by time): copies whose first
 #: author comes later in the file, near-copies (one whose first author comes later in the file,
-#: two pushed at the same moment), lookalike aliases, a run already on another board (pushed there
-#: later, and earlier), a racer bettering and worsening, a duplicate.
+#: two pushed at the same moment), lookalike aliases (one pair whose first comes later in the
+#: file), a run already on another board (pushed there later, and earlier), a racer bettering and
+#: worsening, a duplicate.
 ITEMS = [
     item(BOB, 10),
     item(make_record("Quick", [(10402, 100), (10503, 100), (10598, 100)]), 25),  # after Swift's
+    item(make_record("Z0e", [(13000, 100)]), 45),  # an alias like Zoe's, pushed after hers
     item(make_record("Ada", [(9900, 100), (9950, 100), (9990, 100)], model="slow"), 1),
     item(copy_of(BOB, "Copycat"), 5),  # pushed before Bob: Bob's is the copy
     item(ADA_FAST, 20),
@@ -79,6 +82,7 @@ ITEMS = [
     item(make_record("Tick", [(10800, 100), (10900, 100), (11000, 100)]), 9),
     item(make_record("Tock", [(10803, 100), (10902, 100), (10998, 100)]), 9),
     item(make_record("Swift", [(10400, 100), (10500, 100), (10600, 100)]), 12),
+    item(make_record("Zoe", [(13100, 100)]), 35),
 ]
 
 
@@ -136,7 +140,7 @@ def state(store: BoardStore) -> dict[str, Any]:
         "history": {r: [(s.board_id, s.submission_id, s.submitted_at, s.score.flags)
                         for s in store.history(r)] for r in racers},
         "tallies": {r: store.tally(FINALS, r) for r in racers},
-        "holders": [store.holders(board, fingerprints, [r for r in racers] + ["0llie", "ollie"])
+        "holders": [store.holders(board, fingerprints, [r for r in racers] + ["0llie", "ollie", "zoe"])
                     for board in (FINALS, TRACK)],
         "authors": {f: sorted((a.racer_key, a.first_at, a.board_id, a.submission_id) for a in authors)
                     for f, authors in store.authors_of(fingerprints).items()},
@@ -172,9 +176,27 @@ def test_an_import_in_bulk_writes_what_replaying_it_writes(tmp_path: Path, kind:
     assert flagged["Nearly"] == ["near-copy"]
     assert flagged["Quick"] == ["near-copy"] and "Swift" not in flagged, "Swift pushed first"
     assert flagged["Tick"] == flagged["Tock"] == ["near-copy"], "pushed at the same moment"
+    assert flagged["Z0e"] == ["lookalike"] and "Zoe" not in flagged, "Zoe pushed first"
+    assert expected["holders"][0][1]["zoe"] == "zoe", "and holds the alias's look"
     assert "lookalike" in flagged["0llie"] and flagged["Thief"] == ["copied-run"]
     assert flagged["TieA"] == flagged["TieB"] == ["copied-run"], "pushed at the same moment"
     assert expected["entries"][TRACK][0][2] == ["copied-run"], "the veteran's run, copied earlier"
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "dynamodb"])
+def test_after_an_import_the_racer_who_pushed_first_keeps_pushing_and_the_lookalike_cannot(
+        tmp_path: Path, kind: str) -> None:
+    """The export lists Z0e's run before Zoe's, though Zoe pushed hers first: on the board the
+    import makes, Zoe still pushes under her alias, and Z0e's new push is refused."""
+    for store in new_store(kind, tmp_path / "board.db"):
+        service = LeaderboardService(store, clock=Clock())
+        loaded(service, ITEMS, batch=4)
+        zoe, z0e = (Caller(principal=f"join:{name}", name=name) for name in ("zoe", "z0e"))
+        for alias, racer in (("Zoe", zoe), ("Z0e", z0e)):  # their results came without sign-ins
+            service.assign_alias(alias, racer.principal)
+        service.push(make_record("Zoe", [(12900, 100)], model="new"), FINALS, caller=zoe)
+        with pytest.raises(AliasTaken, match="could pass for 'zoe'"):
+            service.push(make_record("Z0e", [(12800, 100)], model="new"), FINALS, caller=z0e)
 
 
 def test_an_import_in_bulk_checks_each_submission_before_writing_anything(tmp_path: Path) -> None:

@@ -238,6 +238,7 @@ class _Replay:
         self.written: dict[str, PreparedSubmission] = {}
         self.claims: list[tuple[str, str]] = []
         self.held: list[tuple[str, str]] = []
+        self.handed: list[tuple[str, str]] = []  # skeletons given to who pushed first
         self.runs: list[IndexedRun] = []
         self.audit: list[AuditEvent] = []
         self.later: list[tuple[Where, str, str]] = []  # flags on other batches' or boards' runs
@@ -262,8 +263,7 @@ class _Replay:
             self.skeleton_holders[prepared.skeleton] = racer_key
             self.held.append((prepared.skeleton, racer_key))
         elif holder != racer_key:
-            self._flag((self.board_id, racer_key, submission_id), prepared.racer,
-                       LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
+            self._lookalikes(prepared, holder)
         for fingerprint, lane, laps in prepared.runs:  # its copies and near-copies
             if len(self.authors[fingerprint]) > 1:
                 self._flag_copies(self.authors[fingerprint])
@@ -296,6 +296,30 @@ class _Replay:
         for racer, (_, board_id, submission_id) in ordered[1:] if len(tied) == 1 else ordered:
             self._flag((board_id, racer, submission_id), None, COPIED,
                        f"the same laps as {first_racer!r}'s on {first_board!r}, pushed first")
+
+    def _lookalikes(self, prepared: PreparedSubmission, holder: str) -> None:
+        """As ``Transfer._lookalikes``: of two racers whose aliases could pass for each other's
+        on the board, the one who pushed there first holds the skeleton, and the other's runs
+        are flagged."""
+        row = prepared.row
+        theirs = self._on_board(holder)
+        if not theirs or self._on_board(row.racer_key)[0][0] >= theirs[0][0]:
+            self._flag((self.board_id, row.racer_key, row.submission_id), prepared.racer,
+                       LOOKALIKE, f"the alias could pass for {holder!r}'s on the board")
+            return
+        self.skeleton_holders[prepared.skeleton] = row.racer_key
+        self.handed.append((prepared.skeleton, row.racer_key))
+        why = f"the alias could pass for {row.racer_key!r}'s on the board"
+        for _, submission_id, racer in theirs:
+            self._flag((self.board_id, holder, submission_id), racer, LOOKALIKE, why)
+
+    def _on_board(self, racer_key: str) -> list[tuple[str, str, str]]:
+        """The racer's submissions on the board, stored or of this batch so far, oldest first:
+        (time as a timestamp, submission id, alias)."""
+        stored = [(ranking.timestamp(s.submitted_at), s.submission_id, s.racer)
+                  for s in self.load.store.history(racer_key, self.board_id)]
+        return sorted(stored + [(p.row.submitted_at, p.row.submission_id, p.racer)
+                                for p in self.written.values() if p.row.racer_key == racer_key])
 
     def _flag_near_copy(self, prepared: PreparedSubmission, fingerprint: str,
                         near: NearTuple) -> None:
@@ -355,8 +379,11 @@ class _Replay:
         return row._replace(submission=submission.model_dump_json(), entry=entry.model_dump_json())
 
     def flag_the_others(self) -> None:
-        """Flag the runs of other batches and other boards this batch showed to be copies."""
+        """Flag the runs of other batches and other boards this batch showed to be copies (or
+        lookalikes), and give the skeletons it found held by a later racer to the first."""
         store, keeper = self.load.store, self.load.keeper
+        for skeleton, racer_key in self.handed:
+            store.hand_over_skeleton(self.board_id, skeleton, racer_key)
         for (board_id, racer_key, submission_id), flag, why in self.later:
             other = store.get_submission(board_id, racer_key, submission_id)
             if other is not None and store.flag_submission(board_id, racer_key, submission_id, flag):

@@ -170,15 +170,28 @@ class Transfer:
                       caller: Caller) -> list[FlaggedRun]:
         """Index a stored submission for copies and lookalikes, and flag what it finds."""
         prints = run_prints(record)
+        skeleton = confusable_skeleton(record.racer)
         indexed = self.store.index_submission(submission, prints, evaluation_fingerprints(record),
-                                              confusable_skeleton(record.racer))
+                                              skeleton)
         flagged: list[FlaggedRun] = []
         if indexed.skeleton_holder is not None:
-            flagged += self._flag(submission, LOOKALIKE, f"the alias could pass for "
-                                  f"{indexed.skeleton_holder!r}'s on the board", caller)
+            flagged += self._lookalikes(submission, skeleton, indexed.skeleton_holder, caller)
         for run in prints:
             flagged += self._copies_of(submission, run, caller)
         return flagged
+
+    def _lookalikes(self, submission: Submission, skeleton: str, holder: str,
+                    caller: Caller) -> list[FlaggedRun]:
+        """Of two racers whose aliases could pass for each other's on a board, the one who pushed
+        there first holds the alias's skeleton, and the other's runs are flagged."""
+        board_id, racer = submission.board_id, submission.racer_key
+        theirs = self.store.history(holder, board_id)
+        if not theirs or self.store.history(racer, board_id)[0].submitted_at >= theirs[0].submitted_at:
+            return self._flag(submission, LOOKALIKE, f"the alias could pass for {holder!r}'s on "
+                              "the board", caller)
+        self.store.hand_over_skeleton(board_id, skeleton, racer)
+        why = f"the alias could pass for {racer!r}'s on the board"
+        return [run for other in theirs for run in self._flag(other, LOOKALIKE, why, caller)]
 
     def _copies_of(self, submission: Submission, run: RunPrint, caller: Caller) -> list[FlaggedRun]:
         flagged: list[FlaggedRun] = []

@@ -433,6 +433,9 @@ class BoardStore(NoticeStore, Protocol):
     def hand_over_fingerprint(self, board_id: str, fingerprint: str, racer_key: str) -> None:
         """Give the fingerprint on the board to ``racer_key`` (its first author)."""
 
+    def hand_over_skeleton(self, board_id: str, skeleton: str, racer_key: str) -> None:
+        """Give the confusable skeleton on the board to ``racer_key`` (who pushed there first)."""
+
     def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
                         flag: str) -> bool:
         """Add ``flag`` to the submission's score, and to the racer's entry when it is that

@@ -731,6 +731,11 @@ class SqliteStore(SqliteSeasons):
             db.execute("INSERT OR REPLACE INTO fingerprints VALUES (?, ?, ?)",
                        (board_id, fingerprint, racer_key))
 
+    def hand_over_skeleton(self, board_id: str, skeleton: str, racer_key: str) -> None:
+        with self._write() as db:
+            db.execute("INSERT OR REPLACE INTO skeletons VALUES (?, ?, ?)",
+                       (board_id, skeleton, racer_key))
+
     def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
                         flag: str) -> bool:
         with self._write() as db:

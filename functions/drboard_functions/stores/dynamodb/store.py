@@ -255,6 +255,9 @@ class DynamoDbStore(DynamoDbSeasons):
         self.client.put_item(TableName=self.table,
                              Item=fingerprint_item(board_id, fingerprint, racer_key))
 
+    def hand_over_skeleton(self, board_id: str, skeleton: str, racer_key: str) -> None:
+        self.client.put_item(TableName=self.table, Item=skeleton_item(board_id, skeleton, racer_key))
+
     def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
                         flag: str) -> bool:
         for attempt in range(MAX_ATTEMPTS):
