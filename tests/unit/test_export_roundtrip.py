@@ -69,7 +69,7 @@ def pushed_board(service: LeaderboardService, clock: Clock, rng: random.Random) 
 
 def shown(service: LeaderboardService) -> dict[str, Any]:
     """The board's standings and every racer's history on it, as the board shows them."""
-    page = service.board_page(BOARD, 1, None).model_dump()
+    page = service.board_page(BOARD).model_dump()
     del page["board"]["version"]  # each board counts its own changes
     histories = {racer: [item.model_dump() for item in service.history(racer, BOARD)]
                  for racer in RACERS if service.store.tally(BOARD, racer_key(racer)).submissions}
