@@ -679,6 +679,22 @@ class StoreContract(SeasonStoreContract):
         assert [s.version for s in store.list_boards()] == [seen[-1]]
         assert store.front_page(TRACK, 1)[0] == store.get_board(TRACK)
 
+    def test_a_flag_goes_on_a_run_and_its_entry_once_and_comes_off_again(self, store: BoardStore) -> None:
+        record = make_record("Ada", lap(9000))
+        submit(store, record, at(0))
+        seen = [version(store)]
+        for remove, changes in ((False, True), (False, False), (True, True), (True, False)):
+            assert store.flag_submission(TRACK, "ada", record.submission_id, "lookalike",
+                                         remove=remove) is changes
+            flags = [] if remove else ["lookalike"]
+            stored = store.get_submission(TRACK, "ada", record.submission_id)
+            entry = store.get_entry(TRACK, "ada")
+            assert stored is not None and entry is not None
+            assert stored.score.flags == entry.score.flags == flags
+            seen.append(version(store))
+        assert seen[1] > seen[0] and seen[3] > seen[2], "a page showing the flag is read again"
+        assert not store.flag_submission(TRACK, "ada", "0" * 64, "lookalike")
+
     def test_a_board_that_is_not_there_has_no_version(self, store: BoardStore) -> None:
         assert store.board_version(TRACK) is None
         store.create_board(make_board())

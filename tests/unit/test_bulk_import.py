@@ -57,11 +57,12 @@ def item(record: Record, minutes: int) -> ImportedSubmission:
 
 #: An export's submissions, in its order (by submission id, not by time): copies whose first
 #: author comes later in the file, near-copies (one whose first author comes later in the file,
-#: two pushed at the same moment), lookalike aliases (one pair whose first comes later in the
-#: file), a run already on another board (pushed there later, and earlier), a racer bettering and
-#: worsening, a duplicate.
+#: two pushed at the same moment), lookalike aliases (a pair whose first comes later in the file,
+#: her later run listed before both), a run already on another board (pushed there later, and
+#: earlier), a racer bettering and worsening, a duplicate.
 ITEMS = [
     item(BOB, 10),
+    item(make_record("Zoe", [(13200, 100)], model="later"), 50),  # her second push, listed first
     item(make_record("Quick", [(10402, 100), (10503, 100), (10598, 100)]), 25),  # after Swift's
     item(make_record("Z0e", [(13000, 100)]), 45),  # an alias like Zoe's, pushed after hers
     item(make_record("Ada", [(9900, 100), (9950, 100), (9990, 100)], model="slow"), 1),
@@ -178,6 +179,10 @@ def test_an_import_in_bulk_writes_what_replaying_it_writes(tmp_path: Path, kind:
     assert flagged["Tick"] == flagged["Tock"] == ["near-copy"], "pushed at the same moment"
     assert flagged["Z0e"] == ["lookalike"] and "Zoe" not in flagged, "Zoe pushed first"
     assert expected["holders"][0][1]["zoe"] == "zoe", "and holds the alias's look"
+    assert [flags for *_, flags in expected["history"]["zoe"]] == [[], []], "none of her runs"
+    unflagged = [e for e in expected["audit"][FINALS] if e[0] == "unflag"]
+    assert unflagged == [("unflag", "Zoe", ITEMS[1].record.submission_id,
+                          "lookalike: pushed to the board before 'z0e', whose runs are flagged instead")]
     assert "lookalike" in flagged["0llie"] and flagged["Thief"] == ["copied-run"]
     assert flagged["TieA"] == flagged["TieB"] == ["copied-run"], "pushed at the same moment"
     assert expected["entries"][TRACK][0][2] == ["copied-run"], "the veteran's run, copied earlier"

@@ -302,6 +302,12 @@ def with_flag(item: Flagged, flag: str) -> Flagged:
     return item.model_copy(update={"score": score})
 
 
+def without_flag(item: Flagged, flag: str) -> Flagged:
+    """The entry or submission without ``flag`` on its score."""
+    score = item.score.model_copy(update={"flags": [f for f in item.score.flags if f != flag]})
+    return item.model_copy(update={"score": score})
+
+
 class AliasClaim(Model):
     """An alias and the sign-in that holds it: one alias per sign-in, one sign-in per alias."""
 
@@ -312,8 +318,8 @@ class AliasClaim(Model):
 
 
 AuditAction = Literal["push", "create", "update", "close", "delete", "restore", "import",
-                      "remove-entry", "ban", "unban", "flag", "alias-reserve", "alias-release",
-                      "alias-assign", "recheck", "webhook-add", "webhook-remove"]
+                      "remove-entry", "ban", "unban", "flag", "unflag", "alias-reserve",
+                      "alias-release", "alias-assign", "recheck", "webhook-add", "webhook-remove"]
 
 
 class AuditEvent(Model):

@@ -241,7 +241,8 @@ class _Replay:
         self.handed: list[tuple[str, str]] = []  # skeletons given to who pushed first
         self.runs: list[IndexedRun] = []
         self.audit: list[AuditEvent] = []
-        self.later: list[tuple[Where, str, str]] = []  # flags on other batches' or boards' runs
+        #: Flags on other batches' or boards' runs, to add (or to take off: True), in order.
+        self.later: list[tuple[Where, str, str, bool]] = []
         for prepared in batch:
             row = prepared.row
             if row.submission_id not in self.present and row.submission_id not in self.written:
@@ -312,6 +313,9 @@ class _Replay:
         why = f"the alias could pass for {row.racer_key!r}'s on the board"
         for _, submission_id, racer in theirs:
             self._flag((self.board_id, holder, submission_id), racer, LOOKALIKE, why)
+        why = f"pushed to the board before {holder!r}, whose runs are flagged instead"
+        for _, submission_id, racer in self._on_board(row.racer_key):
+            self._unflag((self.board_id, row.racer_key, submission_id), racer, LOOKALIKE, why)
 
     def _on_board(self, racer_key: str) -> list[tuple[str, str, str]]:
         """The racer's submissions on the board, stored or of this batch so far, oldest first:
@@ -355,7 +359,19 @@ class _Replay:
             self._event("flag", racer or self.written[submission_id].racer, submission_id,
                         f"{flag}: {why}")
         else:
-            self.later.append((where, flag, why))
+            self.later.append((where, flag, why, False))
+
+    def _unflag(self, where: Where, racer: str, flag: str, why: str) -> None:
+        """Take a flag off a run: this batch's as it writes it, another's after the batch."""
+        flags = self.flags.get(where, [])
+        flagged_here = flag in flags
+        if flagged_here:
+            flags.remove(flag)
+        if where[0] == self.board_id and where[2] in self.written:
+            if flagged_here:
+                self._event("unflag", racer, where[2], f"{flag}: {why}")
+        else:
+            self.later.append((where, flag, why, True))
 
     def _event(self, action: str, racer: str, submission_id: str, detail: str = "") -> None:
         keeper = self.load.keeper
@@ -384,8 +400,10 @@ class _Replay:
         store, keeper = self.load.store, self.load.keeper
         for skeleton, racer_key in self.handed:
             store.hand_over_skeleton(self.board_id, skeleton, racer_key)
-        for (board_id, racer_key, submission_id), flag, why in self.later:
+        for (board_id, racer_key, submission_id), flag, why, remove in self.later:
             other = store.get_submission(board_id, racer_key, submission_id)
-            if other is not None and store.flag_submission(board_id, racer_key, submission_id, flag):
-                keeper.audit(board_id, "flag", self.load.caller, racer=other.racer,
-                             submission_id=submission_id, detail=f"{flag}: {why}")
+            if other is not None and store.flag_submission(board_id, racer_key, submission_id,
+                                                           flag, remove=remove):
+                keeper.audit(board_id, "unflag" if remove else "flag", self.load.caller,
+                             racer=other.racer, submission_id=submission_id,
+                             detail=f"{flag}: {why}")

@@ -191,7 +191,11 @@ class Transfer:
                               "the board", caller)
         self.store.hand_over_skeleton(board_id, skeleton, racer)
         why = f"the alias could pass for {racer!r}'s on the board"
-        return [run for other in theirs for run in self._flag(other, LOOKALIKE, why, caller)]
+        flagged = [run for other in theirs for run in self._flag(other, LOOKALIKE, why, caller)]
+        why = f"pushed to the board before {holder!r}, whose runs are flagged instead"
+        for mine in self.store.history(racer, board_id):
+            self._flag(mine, LOOKALIKE, why, caller, remove=True)
+        return flagged
 
     def _copies_of(self, submission: Submission, run: RunPrint, caller: Caller) -> list[FlaggedRun]:
         flagged: list[FlaggedRun] = []
@@ -234,13 +238,18 @@ class Transfer:
                                       caller)
         return flagged
 
-    def _flag(self, submission: Submission, flag: str, why: str, caller: Caller) -> list[FlaggedRun]:
-        """Flag a stored run for the organiser, once (an audit event says why)."""
+    def _flag(self, submission: Submission, flag: str, why: str, caller: Caller,
+              remove: bool = False) -> list[FlaggedRun]:
+        """Flag a stored run for the organiser, once (an audit event says why); with ``remove``,
+        take the flag off (and list nothing)."""
         if not self.store.flag_submission(submission.board_id, submission.racer_key,
-                                          submission.submission_id, flag):
+                                          submission.submission_id, flag, remove=remove):
             return []
-        self.keeper.audit(submission.board_id, "flag", caller, racer=submission.racer,
-                          submission_id=submission.submission_id, detail=f"{flag}: {why}")
+        self.keeper.audit(submission.board_id, "unflag" if remove else "flag", caller,
+                          racer=submission.racer, submission_id=submission.submission_id,
+                          detail=f"{flag}: {why}")
+        if remove:
+            return []
         return [FlaggedRun(board_id=submission.board_id, racer=submission.racer,
                            submission_id=submission.submission_id, flag=flag, why=why)]
 

@@ -437,9 +437,10 @@ class BoardStore(NoticeStore, Protocol):
         """Give the confusable skeleton on the board to ``racer_key`` (who pushed there first)."""
 
     def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
-                        flag: str) -> bool:
-        """Add ``flag`` to the submission's score, and to the racer's entry when it is that
-        submission (bumping the board's version); whether anything changed."""
+                        flag: str, remove: bool = False) -> bool:
+        """Add ``flag`` to the submission's score (with ``remove``: take it off), and to the
+        racer's entry when it is that submission (bumping the board's version); whether
+        anything changed."""
 
     def index_submission(self, submission: Submission, runs: Sequence[RunPrint],
                          fingerprints: Sequence[str], skeleton: str | None) -> Indexed:

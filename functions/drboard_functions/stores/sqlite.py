@@ -37,6 +37,7 @@ from ..models.domain import (
     SubmissionLimits,
     WriteOutcome,
     with_flag,
+    without_flag,
 )
 from . import rank_buckets
 from .base import (
@@ -737,7 +738,8 @@ class SqliteStore(SqliteSeasons):
                        (board_id, skeleton, racer_key))
 
     def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
-                        flag: str) -> bool:
+                        flag: str, remove: bool = False) -> bool:
+        changed = without_flag if remove else with_flag
         with self._write() as db:
             row = db.execute("SELECT submission FROM submissions WHERE board_id = ? AND "
                              "submission_id = ? AND racer_key = ?",
@@ -745,14 +747,14 @@ class SqliteStore(SqliteSeasons):
             if row is None:
                 return False
             submission = Submission.model_validate_json(row[0])
-            if flag in submission.score.flags:
+            if (flag in submission.score.flags) != remove:
                 return False
             db.execute("UPDATE submissions SET submission = ? WHERE board_id = ? AND submission_id = ?",
-                       (with_flag(submission, flag).model_dump_json(), board_id, submission_id))
+                       (changed(submission, flag).model_dump_json(), board_id, submission_id))
             entry = self._entry(db, board_id, racer_key)
             if entry is not None and entry.submission_id == submission_id:
                 db.execute("UPDATE entries SET entry = ? WHERE board_id = ? AND racer_key = ?",
-                           (with_flag(entry, flag).model_dump_json(), board_id, racer_key))
+                           (changed(entry, flag).model_dump_json(), board_id, racer_key))
                 db.execute("UPDATE boards SET version = version + 1 WHERE board_id = ?", (board_id,))
             return True
 

@@ -32,6 +32,7 @@ from ...models.domain import (
     SubmissionLimits,
     WriteOutcome,
     with_flag,
+    without_flag,
 )
 from ..aws_errors import cancellation_codes, code_of, translating
 from ..base import (
@@ -259,7 +260,8 @@ class DynamoDbStore(DynamoDbSeasons):
         self.client.put_item(TableName=self.table, Item=skeleton_item(board_id, skeleton, racer_key))
 
     def flag_submission(self, board_id: str, racer_key: str, submission_id: str,
-                        flag: str) -> bool:
+                        flag: str, remove: bool = False) -> bool:
+        changed = without_flag if remove else with_flag
         for attempt in range(MAX_ATTEMPTS):
             if attempt:
                 backoff(attempt)
@@ -267,17 +269,17 @@ class DynamoDbStore(DynamoDbSeasons):
             if item is None:
                 return False
             submission = submission_of(item)
-            if flag in submission.score.flags:
+            if (flag in submission.score.flags) != remove:
                 return False
             entry = self.get_entry(board_id, racer_key)
-            flagged = submission_item(with_flag(submission, flag))
+            flagged = submission_item(changed(submission, flag))
             writes: list[TransactWriteItemTypeDef] = [{"Put": {
                 "TableName": self.table, "Item": flagged, "ConditionExpression": "#data = :seen",
                 "ExpressionAttributeNames": {"#data": "data"},
                 "ExpressionAttributeValues": {":seen": item["data"]}}}]
             if entry is not None and entry.submission_id == submission_id:
                 writes.append({"Put": {
-                    "TableName": self.table, "Item": entry_item(with_flag(entry, flag)),
+                    "TableName": self.table, "Item": entry_item(changed(entry, flag)),
                     "ConditionExpression": "rank_key = :seen",
                     "ExpressionAttributeValues": {":seen": text(entry.rank_key)}}})
                 writes.append({"Update": {
