@@ -13,6 +13,7 @@ from typing import Any
 
 import boto3
 import pytest
+from drboard_assembler.aliases import confusable_skeleton
 from drboard_assembler.record import Record
 from drboard_functions.errors import AliasTaken, BoardMismatch, InvalidSubmission, SubmissionTooLarge
 from drboard_functions.identity import Caller
@@ -234,6 +235,58 @@ def test_records_of_many_runs_are_imported_with_every_claim(tmp_path: Path, kind
         assert len(prints) == 130 and len(held) == 130
         assert store.get_board(FINALS).participants == 13  # type: ignore[union-attr]
 
+
+
+#: Racers of random imports: two pairs of aliases that could pass for each other, and others.
+SHUFFLED_RACERS = ["Zoe", "Z0e", "Ollie", "0llie", "Max", "Ann", "Bea"]
+
+
+def random_items(seed: int) -> list[ImportedSubmission]:
+    """Submissions of SHUFFLED_RACERS at distinct times, of their own runs, copies and near-copies
+    of earlier ones. No racer has the same laps twice: the runs' index keeps a racer's first
+    submission of a run, so a second one's flags depend on the order it is met in."""
+    rng = random.Random(seed)
+    items: list[ImportedSubmission] = []
+    seen: set[tuple[str, str]] = set()
+    for n, minute in enumerate(rng.sample(range(1, 5000), 30)):
+        racer, kind = rng.choice(SHUFFLED_RACERS), rng.random()
+        if kind < 0.15 and items:
+            record = copy_of(rng.choice(items).record, racer)
+        elif kind < 0.35 and items:
+            laps = [(lap.time_ms + rng.randint(-4, 4), 100)
+                    for lap in rng.choice(items).record.evaluations[0].laps]
+            record = make_record(racer, laps, model=f"near-{n}")
+        else:
+            record = make_record(racer, [(rng.randint(9000, 9100), 100) for _ in range(3)],
+                                 model=f"own-{n}")
+        run = (racer, run_prints(record)[0].fingerprint)
+        if run not in seen:
+            seen.add(run)
+            items.append(item(record, minute))
+    return items
+
+
+def flags_and_holders(store: BoardStore) -> tuple[dict[str, list[tuple[str, list[str]]]], dict[str, str]]:
+    history = {racer: sorted((s.submission_id, sorted(s.score.flags))
+                             for s in store.history(racer_key(racer), FINALS))
+               for racer in SHUFFLED_RACERS}
+    return history, store.holders(FINALS, [], [confusable_skeleton(r) for r in SHUFFLED_RACERS])[1]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_an_import_leaves_the_same_board_whatever_order_its_file_lists_them_in(
+        tmp_path: Path, seed: int) -> None:
+    """Copies, near-copies and lookalike aliases are judged by when each racer pushed, not by
+    where the file lists them: in bulk in one order, and one at a time in another, the same
+    runs are flagged and the same racers keep their aliases' looks."""
+    items = random_items(seed)
+    shuffled = random.Random(seed).sample(items, len(items))
+    for store in new_store("sqlite", tmp_path / "bulk.db"):
+        loaded(LeaderboardService(store, clock=Clock()), items, batch=7)
+        in_bulk = flags_and_holders(store)
+    for store in new_store("sqlite", tmp_path / "one-by-one.db"):
+        replayed(LeaderboardService(store, clock=Clock()), shuffled)
+        assert flags_and_holders(store) == in_bulk
 
 
 def near_run(rng: random.Random, n: int) -> NearRun:
