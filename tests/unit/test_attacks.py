@@ -15,6 +15,7 @@ import pytest
 from botocore.exceptions import ClientError, ReadTimeoutError
 from click.testing import CliRunner
 from drboard_assembler import record as record_module
+from drboard_assembler.limits import MAX_EVALUATION_RUNS
 from drboard_assembler.record import EvaluationRun, Lap, Record
 from drboard_cli import invite as invites
 from drboard_cli.main import cli
@@ -202,6 +203,27 @@ def test_the_author_takes_their_run_back_from_a_copy_stored_before_the_rule(
     assert isinstance(receipt, PushReceipt) and receipt.status == "created"
     copycat = store.get_entry("club-final", "copycat")
     assert copycat is not None and "copied-run" in copycat.score.flags
+
+
+def test_a_racers_first_push_of_a_run_stays_first_when_they_push_it_to_another_board(
+        service: LeaderboardService) -> None:
+    service.push(leader(), caller=BLAZE)
+    service.create_board(BoardSpec(board_id="club-final", title="Final", track="reInvent2019"))
+    service.push(leader(), "club-final", caller=BLAZE)
+    with pytest.raises(CopiedRun, match=f"already on {TRACK!r} under another racer"):
+        service.push(edited(leader(), "Copycat", renumbered), "club-final", caller=COPIER)
+
+
+def test_every_run_of_a_record_is_guarded_however_many_it_holds(service: LeaderboardService) -> None:
+    """A record of the most runs a record may hold: its last run is claimed and compared like a
+    record's only one (on DynamoDB its index does not fit the push's transaction)."""
+    runs = [[(9000 + 10 * n + lap, 100) for lap in range(3)] for n in range(MAX_EVALUATION_RUNS)]
+    service.push(make_record("Blaze", runs=runs), caller=BLAZE)
+    with pytest.raises(CopiedRun, match="'blaze'"):
+        service.push(make_record("Copycat", runs[-1]), caller=COPIER)
+    near = make_record("Nearby", [(time + 2, pct) for time, pct in runs[-1]])
+    receipt = service.push(near, caller=STRANGER)
+    assert isinstance(receipt, PushReceipt) and receipt.entry.flags == ["near-copy"]
 
 
 def test_an_imported_run_is_claimed_and_cannot_be_copied(service: LeaderboardService) -> None:

@@ -23,7 +23,7 @@ from drboard_cli.serve import LocalContext
 from drboard_functions.handlers import admin, card, pull, push, wiring
 from drboard_functions.routes.headers import CORS_HEADERS, CORS_MAX_AGE_S, CORS_ORIGIN, READ_CORS
 from drboard_functions.routes.kept import PUSHED_LIMITS, KeptPages, Wanted, event_answer, shelf_key
-from drboard_functions.stores.dynamodb.pages import DynamoDbPageShelf
+from drboard_functions.stores.dynamodb.pages import MAX_KEPT_BYTES, DynamoDbPageShelf
 from drboard_functions.stores.pages import StoredPage
 
 from tests.awskit import REGION
@@ -72,12 +72,22 @@ def page_writes() -> list[str]:
     """The partitions of the pages the functions keep from now on, one per page written."""
     written: list[str] = []
 
-    def note(params: dict[str, Any], **_: Any) -> None:
-        if params["Item"]["board"]["S"].startswith("#PAGE#"):
-            written.append(params["Item"]["board"]["S"])
+    def note(item: dict[str, Any]) -> None:
+        if item["board"]["S"].startswith("#PAGE#"):
+            written.append(item["board"]["S"])
+
+    def put(params: dict[str, Any], **_: Any) -> None:
+        note(params["Item"])
+
+    def batch(params: dict[str, Any], **_: Any) -> None:
+        for requests in params["RequestItems"].values():
+            for request in requests:
+                if "PutRequest" in request:
+                    note(request["PutRequest"]["Item"])
 
     assert boto3.DEFAULT_SESSION is not None
-    boto3.DEFAULT_SESSION.events.register("before-parameter-build.dynamodb.PutItem", note)
+    boto3.DEFAULT_SESSION.events.register("before-parameter-build.dynamodb.PutItem", put)
+    boto3.DEFAULT_SESSION.events.register("before-parameter-build.dynamodb.BatchWriteItem", batch)
     return written
 
 
@@ -283,6 +293,23 @@ def test_the_shelf_keeps_a_page_compressed_and_never_an_older_one(aws: None) -> 
     assert shelf.page(BOARD, "json#100")[1] == page(3, big, fresh_until=1_800_000_000.5)
     shelf.keep(BOARD, "json#100", page(4))
     assert shelf.page(BOARD, "json#100")[1] == page(4)
+
+
+def test_the_shelf_keeps_the_pages_of_a_change_together_and_skips_one_too_big(aws: None) -> None:
+    tablekit = pytest.importorskip("tests.tablekit")
+    client = boto3.client("dynamodb", region_name=REGION)
+    tablekit.create_board_table(client, TABLE)
+    shelf = DynamoDbPageShelf(client, TABLE)
+    calls: list[str] = []
+    client.meta.events.register("before-call.dynamodb.*",
+                                lambda model, **_: calls.append(model.name))
+    huge = os.urandom(MAX_KEPT_BYTES).hex()  # random: compressed, still over the bound
+    shelf.keep_all(BOARD, [("json#25", page(5)), ("json#100", page(5, '{"entries":[1]}')),
+                           ("json#50", page(5, huge))])
+    assert calls == ["BatchWriteItem"]
+    assert shelf.page(BOARD, "json#25")[1] == page(5)
+    assert shelf.page(BOARD, "json#100")[1] == page(5, '{"entries":[1]}')
+    assert shelf.page(BOARD, "json#50") == (None, None)
 
 
 def test_kept_pages_answer_only_while_the_version_and_the_moment_hold() -> None:

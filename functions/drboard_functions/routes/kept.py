@@ -17,7 +17,7 @@ import json
 import re
 import threading
 from collections import OrderedDict
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from datetime import UTC, datetime
 from http import HTTPStatus
 from typing import TYPE_CHECKING, Any, Generic, Literal, NamedTuple, TypeVar
@@ -267,10 +267,22 @@ class KeptPages:
         """Keep a page just rendered, here and on the store's shelf."""
         self._copies.put(copy_key(page, address), copy)
         if self.shelf is not None:
-            fresh_until = copy.fresh_until.timestamp() if copy.fresh_until is not None else None
-            self.shelf.keep(page.board_id, shelf_key(page, address), StoredPage(
-                copy.version, fresh_until, copy.etag, copy.headers, copy.not_modified_headers,
-                copy.text))
+            self.shelf.keep(page.board_id, shelf_key(page, address), _stored(copy))
+
+    def keep_all(self, board_id: str, pages: Sequence[tuple[Wanted, Copy]]) -> None:
+        """Keep the pages of a board a change rendered for the version it made (no web page:
+        they have no address), here and on the store's shelf, in one write."""
+        for page, copy in pages:
+            self._copies.put(copy_key(page, ""), copy)
+        if self.shelf is not None:
+            self.shelf.keep_all(board_id, [(shelf_key(page, ""), _stored(copy))
+                                           for page, copy in pages])
+
+
+def _stored(copy: Copy) -> StoredPage:
+    fresh_until = copy.fresh_until.timestamp() if copy.fresh_until is not None else None
+    return StoredPage(copy.version, fresh_until, copy.etag, copy.headers,
+                      copy.not_modified_headers, copy.text)
 
 
 class WantedCard(NamedTuple):

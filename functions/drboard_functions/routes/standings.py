@@ -112,8 +112,9 @@ class Standings:
         """Render the board's JSON pages of these sizes as it is now, from one read (or from
         ``front``, the board and its first entries as read already), and keep them."""
         now = self.service.clock()
-        for limit, page in zip(limits, self.service.board_pages(board_id, limits, front), strict=True):
-            self.pages.keep(Wanted(board_id, "json", limit), "", _json_copy(page, limit, now))
+        pages = self.service.board_pages(board_id, limits, front)
+        self.pages.keep_all(board_id, [(Wanted(board_id, "json", limit), _json_copy(page, limit, now))
+                                       for limit, page in zip(limits, pages, strict=True)])
 
     def _render(self, wanted: Wanted, invite: Invite | None) -> Copy:
         page = self.service.board_page(wanted.board_id, limit=wanted.limit, cursor=None)

@@ -11,6 +11,7 @@ No model here: the pull function reads a kept page before it loads any.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
 
@@ -40,3 +41,7 @@ class PageShelf(Protocol):
     def keep(self, board_id: str, key: str, page: StoredPage) -> None:
         """Keep ``page`` unless a page of a later version is kept already (never raises: a page
         not kept is rendered again by its next reader)."""
+
+    def keep_all(self, board_id: str, pages: Sequence[tuple[str, StoredPage]]) -> None:
+        """Keep the pages a change of the board rendered for the version it made, as they are
+        and in one write (never raises; a reader answers a page only for the version it shows)."""

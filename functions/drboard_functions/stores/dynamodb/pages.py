@@ -8,8 +8,10 @@ a 100-racer page of ~46 kB keeps in ~5 kB). A partition of its own, apart from t
 so that the pull function, which writes the pages it renders, may write nothing else
 (template.yaml limits its writes to these partitions).
 
-One consistent BatchGetItem reads the board's version and a page together; a page is written
-on condition that no page of a later version is kept already. No model is imported here.
+One consistent BatchGetItem reads the board's version and a page together; a page a reader
+rendered is written on condition that no page of a later version is kept already, and the pages
+a change rendered for the version it made are written together, in one BatchWriteItem (each
+reader checks the version it answers anyway). No model is imported here.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import json
 import logging
 import zlib
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from botocore.exceptions import BotoCoreError, ClientError
@@ -69,15 +72,9 @@ class DynamoDbPageShelf:
         return version, page
 
     def keep(self, board_id: str, page_key: str, page: StoredPage) -> None:
-        body = zlib.compress(page.text.encode("utf-8"))
-        if len(body) > MAX_KEPT_BYTES:
+        item = _item(board_id, page_key, page)
+        if item is None:
             return
-        item: dict[str, Any] = key(page_partition(board_id), page_key) | {
-            "board_version": {"N": str(page.version)}, "etag": text(page.etag),
-            "headers": text(json.dumps([page.headers, page.not_modified_headers])),
-            "body": {"B": body}}
-        if page.fresh_until is not None:
-            item["fresh_until"] = {"N": repr(page.fresh_until)}
         try:
             self.client.put_item(TableName=self.table, Item=item,
                                  ConditionExpression="attribute_not_exists(sk) OR board_version <= :v",
@@ -87,6 +84,30 @@ class DynamoDbPageShelf:
                 logger.warning("a page of %s was not kept: %s", board_id, error)
         except BotoCoreError as error:
             logger.warning("a page of %s was not kept: %s", board_id, error)
+
+
+    def keep_all(self, board_id: str, pages: Sequence[tuple[str, StoredPage]]) -> None:
+        items = [item for page_key, page in pages if (item := _item(board_id, page_key, page))]
+        if not items:
+            return
+        try:
+            self.client.batch_write_item(RequestItems={self.table: [
+                {"PutRequest": {"Item": item}} for item in items]})
+        except (ClientError, BotoCoreError) as error:
+            logger.warning("the pages of %s were not kept: %s", board_id, error)
+
+
+def _item(board_id: str, page_key: str, page: StoredPage) -> dict[str, Any] | None:
+    body = zlib.compress(page.text.encode("utf-8"))
+    if len(body) > MAX_KEPT_BYTES:
+        return None
+    item: dict[str, Any] = key(page_partition(board_id), page_key) | {
+        "board_version": {"N": str(page.version)}, "etag": text(page.etag),
+        "headers": text(json.dumps([page.headers, page.not_modified_headers])),
+        "body": {"B": body}}
+    if page.fresh_until is not None:
+        item["fresh_until"] = {"N": repr(page.fresh_until)}
+    return item
 
 
 def _version(item: dict[str, Any]) -> int:

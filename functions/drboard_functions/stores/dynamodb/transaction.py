@@ -9,8 +9,10 @@ stored entry, so concurrent pushes never lose a best nor pass a limit — with t
 moved to match. It also claims, when the push asks, the racer's alias and its confusable skeleton
 on the board, on condition that the board's settings and the event's bans are still those the
 push checked (``settings``, ``bans``). A write whose outcome the service did not report (a timeout
-after the commit) is settled by reading the submission back; the runs' index for every board is
-written once the push has committed.
+after the commit) is settled by reading the submission back. A push's runs are indexed for every
+board in the same transaction when their items fit in it (one write the fewer, and the index is
+never behind the board); an import's, and the runs of a record too big for the transaction, once
+it has committed.
 """
 
 from __future__ import annotations
@@ -42,12 +44,14 @@ from .codecs import (
     EVENT_PARTITION,
     alias_items,
     audit_item,
+    author_sk,
     entry_item,
     fingerprint_item,
     fingerprint_sk,
     key,
     near_item,
     record_item,
+    run_partition,
     skeleton_item,
     skeleton_sk,
     submission_item,
@@ -69,6 +73,8 @@ if TYPE_CHECKING:
 
 FAILED = "ConditionalCheckFailed"
 BATCH_WRITE_ITEMS = 25
+#: DynamoDB's bound on the items of one transaction.
+MAX_TRANSACTION_ITEMS = 100
 
 
 class Slots:
@@ -151,6 +157,7 @@ class PushTransaction:
             current = (self.limits.entry_seen if attempt == 0 and self.limits is not None
                        else self.store.get_entry(board_id, racer))
             slots = self._slots(current, state)
+            indexed = self._add_index(slots)
             try:
                 self._commit(slots)
             except ClientError as error:
@@ -181,7 +188,7 @@ class PushTransaction:
                 if not failed and "TransactionConflict" not in cancellation_codes(error):
                     raise
                 continue  # another push changed the entry or the board meanwhile: look again
-            return self._stored(current)
+            return self._stored(current, indexed)
         raise StoreBusy(f"{board_id!r} is busy with other pushes: gave up after {MAX_ATTEMPTS} "
                         "attempts, nothing was stored; try again in a moment")
 
@@ -326,13 +333,39 @@ class PushTransaction:
             update["ConditionExpression"] = f"attribute_not_exists(sk) OR {allowed}"
         return update
 
-    def _stored(self, current: Entry | None) -> WriteOutcome:
+    def _stored(self, current: Entry | None, indexed: bool) -> WriteOutcome:
         if self.limits is None:
             self._advance_last_submitted()
-        self._index_runs()
+        if not indexed:
+            self._index_runs()
         if current is None or self.entry.rank_key < current.rank_key:
             return WriteOutcome(duplicate=False, improved=True, entry=self.entry)
         return WriteOutcome(duplicate=False, improved=False, entry=current)
+
+    def _add_index(self, slots: Slots) -> bool:
+        """A push's runs indexed for every board in its own transaction, if their items fit. A
+        racer's first time with a run is kept as it is (``if_not_exists``): a push is the newest
+        submission of a run, where an import's may be older (it is indexed after its commit, on
+        condition that it is earlier)."""
+        if self.limits is None:
+            return False
+        submission = self.submission
+        nears = [near_item(run, submission) for run in self.runs if run.laps_ms]
+        if len(slots.items) + len(self.runs) + len(nears) > MAX_TRANSACTION_ITEMS:
+            return False
+        first = {":at": text(ranking.timestamp(submission.submitted_at)),
+                 ":board": text(submission.board_id), ":racer": text(submission.racer_key),
+                 ":submission": text(submission.submission_id)}
+        slots.extend("index", [{"Update": {
+            "TableName": self.table,
+            "Key": key(run_partition(run.fingerprint), author_sk(submission.racer_key)),
+            "UpdateExpression": "SET first_at = if_not_exists(first_at, :at), "
+                                "board_id = if_not_exists(board_id, :board), "
+                                "racer_key = if_not_exists(racer_key, :racer), "
+                                "submission_id = if_not_exists(submission_id, :submission)",
+            "ExpressionAttributeValues": first}} for run in self.runs])
+        slots.extend("index", [{"Put": {"TableName": self.table, "Item": item}} for item in nears])
+        return True
 
     def _index_runs(self) -> None:
         """Index the runs for every board, once the push has committed (a record may hold 50
