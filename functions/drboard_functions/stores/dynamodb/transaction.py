@@ -368,8 +368,8 @@ class PushTransaction:
         return True
 
     def _index_runs(self) -> None:
-        """Index the runs for every board, once the push has committed (a record may hold 50
-        runs: their items would not fit the transaction). The push is stored whatever happens
+        """Index the runs for every board once an import, or a push whose index does not fit its
+        transaction (a record may hold 50 runs), has committed. It is stored whatever happens
         here; a run left out is indexed by the board's next recheck."""
         try:
             for run in self.runs:
