@@ -27,14 +27,13 @@ from ..aws_errors import code_of
 from ..base import ImportBatch, ImportedRow, ImportWritten, IndexedRun, new_rows
 from .codecs import (
     audit_item,
-    author_sk,
+    author_update,
     entry_sk,
     fingerprint_item,
     key,
     lane_partition,
     near_sk,
     record_sk,
-    run_partition,
     skeleton_item,
     submission_sk,
     tally_sk,
@@ -206,14 +205,8 @@ class BulkWrite:
 
     def _index_author(self, run: IndexedRun) -> None:
         try:
-            self.client.update_item(
-                TableName=self.table, Key=key(run_partition(run.fingerprint), author_sk(run.racer_key)),
-                UpdateExpression="SET first_at = :at, board_id = :board, racer_key = :racer, "
-                                 "submission_id = :submission",
-                ConditionExpression="attribute_not_exists(first_at) OR first_at > :at",
-                ExpressionAttributeValues={
-                    ":at": text(run.submitted_at), ":board": text(self.board_id),
-                    ":racer": text(run.racer_key), ":submission": text(run.submission_id)})
+            self.client.update_item(TableName=self.table, **author_update(
+                run.fingerprint, run.racer_key, self.board_id, run.submission_id, run.submitted_at))
         except ClientError as error:
             if code_of(error) != "ConditionalCheckFailedException":
                 raise

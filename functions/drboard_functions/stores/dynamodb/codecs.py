@@ -47,7 +47,7 @@ spans boards:
 from __future__ import annotations
 
 import zlib
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from drboard_assembler.record import Record
 
@@ -176,6 +176,28 @@ def submission_item(submission: Submission) -> Item:
 def audit_item(event: AuditEvent) -> Item:
     return {"board": text(event.board_id), "sk": text(audit_sk(event.event_id)),
             "data": text(event.model_dump_json())}
+
+
+def author_update(fingerprint: str, racer_key: str, board_id: str, submission_id: str,
+                  at: str, *, kept: bool = False) -> dict[str, Any]:
+    """The update of a racer's first time with a run (``update_item``'s arguments but the
+    table): the earliest wins, on condition (ConditionalCheckFailed: an earlier one is kept);
+    with ``kept``, one already there stays, with no condition (for a push's transaction: a
+    push is the newest submission of its run)."""
+    update: dict[str, Any] = {
+        "Key": key(run_partition(fingerprint), author_sk(racer_key)),
+        "ExpressionAttributeValues": {":at": text(at), ":board": text(board_id),
+                                      ":racer": text(racer_key), ":submission": text(submission_id)}}
+    if kept:
+        update["UpdateExpression"] = (
+            "SET first_at = if_not_exists(first_at, :at), board_id = if_not_exists(board_id, :board), "
+            "racer_key = if_not_exists(racer_key, :racer), "
+            "submission_id = if_not_exists(submission_id, :submission)")
+    else:
+        update["UpdateExpression"] = ("SET first_at = :at, board_id = :board, racer_key = :racer, "
+                                      "submission_id = :submission")
+        update["ConditionExpression"] = "attribute_not_exists(first_at) OR first_at > :at"
+    return update
 
 
 def near_item(run: RunPrint, submission: Submission) -> Item:

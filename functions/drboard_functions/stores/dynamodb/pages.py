@@ -85,7 +85,6 @@ class DynamoDbPageShelf:
         except BotoCoreError as error:
             logger.warning("a page of %s was not kept: %s", board_id, error)
 
-
     def keep_all(self, board_id: str, pages: Sequence[tuple[str, StoredPage]]) -> None:
         items = [item for page_key, page in pages if (item := _item(board_id, page_key, page))]
         if not items:

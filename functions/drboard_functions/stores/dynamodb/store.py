@@ -75,7 +75,7 @@ from .codecs import (
     audit_event_of,
     audit_item,
     audit_sk,
-    author_sk,
+    author_update,
     board_item,
     claim_of,
     entry_item,
@@ -317,16 +317,9 @@ class DynamoDbStore(DynamoDbSeasons):
     def index_author(self, submission: Submission, fingerprint: str) -> None:
         """The racer's first time with the run: kept unless this one is earlier."""
         try:
-            self.client.update_item(
-                TableName=self.table,
-                Key=key(run_partition(fingerprint), author_sk(submission.racer_key)),
-                UpdateExpression="SET first_at = :at, board_id = :board, racer_key = :racer, "
-                                 "submission_id = :submission",
-                ConditionExpression="attribute_not_exists(first_at) OR first_at > :at",
-                ExpressionAttributeValues={
-                    ":at": text(ranking.timestamp(submission.submitted_at)),
-                    ":board": text(submission.board_id), ":racer": text(submission.racer_key),
-                    ":submission": text(submission.submission_id)})
+            self.client.update_item(TableName=self.table, **author_update(
+                fingerprint, submission.racer_key, submission.board_id, submission.submission_id,
+                ranking.timestamp(submission.submitted_at)))
         except ClientError as error:
             if code_of(error) != "ConditionalCheckFailedException":
                 raise

@@ -44,14 +44,13 @@ from .codecs import (
     EVENT_PARTITION,
     alias_items,
     audit_item,
-    author_sk,
+    author_update,
     entry_item,
     fingerprint_item,
     fingerprint_sk,
     key,
     near_item,
     record_item,
-    run_partition,
     skeleton_item,
     skeleton_sk,
     submission_item,
@@ -349,22 +348,18 @@ class PushTransaction:
         condition that it is earlier)."""
         if self.limits is None:
             return False
-        submission = self.submission
-        nears = [near_item(run, submission) for run in self.runs if run.laps_ms]
-        if len(slots.items) + len(self.runs) + len(nears) > MAX_TRANSACTION_ITEMS:
+        runs, submission = self.runs, self.submission
+        lapped = [run for run in runs if run.laps_ms]
+        if len(slots.items) + len(runs) + len(lapped) > MAX_TRANSACTION_ITEMS:
             return False
-        first = {":at": text(ranking.timestamp(submission.submitted_at)),
-                 ":board": text(submission.board_id), ":racer": text(submission.racer_key),
-                 ":submission": text(submission.submission_id)}
-        slots.extend("index", [{"Update": {
-            "TableName": self.table,
-            "Key": key(run_partition(run.fingerprint), author_sk(submission.racer_key)),
-            "UpdateExpression": "SET first_at = if_not_exists(first_at, :at), "
-                                "board_id = if_not_exists(board_id, :board), "
-                                "racer_key = if_not_exists(racer_key, :racer), "
-                                "submission_id = if_not_exists(submission_id, :submission)",
-            "ExpressionAttributeValues": first}} for run in self.runs])
-        slots.extend("index", [{"Put": {"TableName": self.table, "Item": item}} for item in nears])
+        at = ranking.timestamp(submission.submitted_at)
+        for run in runs:
+            first: Any = {"TableName": self.table, **author_update(
+                run.fingerprint, submission.racer_key, submission.board_id,
+                submission.submission_id, at, kept=True)}
+            slots.add("index", {"Update": first})
+        slots.extend("index", [{"Put": {"TableName": self.table, "Item": near_item(run, submission)}}
+                               for run in lapped])
         return True
 
     def _index_runs(self) -> None:
