@@ -313,11 +313,31 @@ class _Chunk(NamedTuple):
 
 class _Checked(NamedTuple):
     """A chunk of an export's lines checked: its prepared submissions, its entry lines, the
-    bytes read."""
+    bytes read, and where in the chunk lie the records its submissions store as the lines hold
+    them: (which submission, first byte, end)."""
 
     prepared: list[PreparedSubmission]
     entries: int
     read: int
+    records: list[tuple[int, int, int]]
+
+    def without_records(self) -> _Checked:
+        """The same, with the records that lie in the chunk left out (written ""): what a worker
+        sends back, as the process it sends to has the chunk's bytes (``with_records``)."""
+        prepared = self.prepared
+        for index, _, _ in self.records:
+            row = prepared[index].row
+            prepared[index] = prepared[index]._replace(row=row._replace(record=""))
+        return self
+
+    def with_records(self, data: bytes) -> _Checked:
+        """The records ``without_records`` left out, read again from the chunk's bytes."""
+        prepared = self.prepared
+        for index, start, end in self.records:
+            row = prepared[index].row
+            prepared[index] = prepared[index]._replace(row=row._replace(
+                record=data[start:end].decode()))
+        return self
 
 
 def _opened(service: LeaderboardService, name: str, handle: IO[bytes],
@@ -411,8 +431,9 @@ def _checking(name: str, exported: Board, bulk: BulkImport, handle: IO[bytes], a
         check = functools.partial(_checked_chunk, name, exported, prepare)
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(
         "fork" if forks else "spawn"), initializer=_worker_started)
+    file = handle.fileno() if forks else None
     try:
-        ahead = _Ahead(pool, check, chunks)
+        ahead = _Ahead(pool, functools.partial(_sent_back, check), chunks, file)
         ahead.submit(CHUNKS_A_BATCH + 2 * workers)
         yield ahead.checked()
     finally:
@@ -421,16 +442,18 @@ def _checking(name: str, exported: Board, bulk: BulkImport, handle: IO[bytes], a
 
 class _Ahead:
     """Chunks given to the worker processes ahead of the one written (a batch's, and two per
-    worker, keep them busy while a batch is written), their results taken in the file's order.
-    A line that cannot be read (over the bound) is named once every line before it is checked:
-    the first bad line in the file is the one named."""
+    worker, keep them busy while a batch is written), their results taken in the file's order,
+    with their records read again from the chunk (``file``: where a chunk given without its bytes
+    is read). A line that cannot be read (over the bound) is named once every line before it is
+    checked: the first bad line in the file is the one named."""
 
     def __init__(self, pool: ProcessPoolExecutor, check: Callable[[_Chunk], _Checked],
-                 chunks: Iterator[_Chunk]) -> None:
+                 chunks: Iterator[_Chunk], file: int | None) -> None:
         self.pool = pool
         self.check = check
         self.chunks = chunks
-        self.pending: deque[Future[_Checked]] = deque()
+        self.file = file
+        self.pending: deque[tuple[_Chunk, Future[_Checked]]] = deque()
         self.unread: BadExportFile | None = None
 
     def submit(self, count: int) -> None:
@@ -438,14 +461,19 @@ class _Ahead:
             return
         try:
             for chunk in itertools.islice(self.chunks, count):
-                self.pending.append(self.pool.submit(self.check, chunk))
+                self.pending.append((chunk, self.pool.submit(self.check, chunk)))
         except BadExportFile as error:
             self.unread = error
 
     def checked(self) -> Iterator[_Checked]:
         while self.pending:
-            done = self.pending.popleft().result()
+            chunk, future = self.pending.popleft()
+            done = future.result()
             self.submit(1)
+            if done.records:
+                data = chunk.data if self.file is None else os.pread(self.file, chunk.size,
+                                                                     chunk.offset)
+                done = done.with_records(data)
             yield done
         if self.unread is not None:
             raise self.unread
@@ -503,6 +531,13 @@ def _over_the_bound(name: str, number: int) -> BadExportFile:
     return BadExportFile(f"{name}:{number}: the line is over {MAX_LINE_BYTES >> 20} MiB")
 
 
+def _sent_back(check: Callable[[_Chunk], _Checked], chunk: _Chunk) -> _Checked:
+    """A chunk checked in a worker, as the worker sends it back: without the records that lie in
+    the chunk, which the import's own process has (most of what a chunk's result would carry
+    from one process to the other)."""
+    return check(chunk).without_records()
+
+
 def _read_and_checked(file: int, name: str, exported: Board, prepare: Prepare,
                       chunk: _Chunk) -> _Checked:
     """``_checked_chunk`` of a chunk given without its bytes, read here from the file (its
@@ -518,26 +553,30 @@ def _checked_chunk(name: str, exported: Board, prepare: Prepare, chunk: _Chunk,
                            size=chunk.size)
 
 
-def _lines(name: str, after: int, data: bytes) -> Iterator[tuple[int, bytes]]:
-    """The lines of ``data`` that are not blank, numbered from ``after`` + 1, each within the
-    bound (BadExportFile when the line is reached, so that a bad line before it is named first)."""
+def _lines(name: str, after: int, data: bytes) -> Iterator[tuple[int, int, bytes]]:
+    """The lines of ``data`` that are not blank, numbered from ``after`` + 1, with where each
+    starts in ``data``, each within the bound (BadExportFile when the line is reached, so that a
+    bad line before it is named first)."""
+    start = 0
     for number, raw in enumerate(data.split(b"\n"), after + 1):
         if len(raw) > MAX_LINE_BYTES:
             raise _over_the_bound(name, number)
         if raw and not raw.isspace():  # (stripping would copy every line)
-            yield number, raw
+            yield number, start, raw
+        start += len(raw) + 1
 
 
 def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
-                    lines: Iterable[tuple[int, bytes]], keep: Keep | None = None,
+                    lines: Iterable[tuple[int, int, bytes]], keep: Keep | None = None,
                     size: int = 0) -> _Checked:
-    """Check numbered lines of an export after its board line (``size`` bytes of it) and prepare
-    their submissions."""
+    """Check numbered lines of an export after its board line (``size`` bytes of it), each with
+    where it starts, and prepare their submissions."""
     prepared: list[PreparedSubmission] = []
+    records: list[tuple[int, int, int]] = []
     entries = 0
-    for number, raw in lines:
+    for number, start, raw in lines:
         where = f"{name}:{number}"
-        read: tuple[Submission, Record, str | None] | None = _submission_line(raw)
+        read = _submission_line(raw)
         if read is None:
             line = _parsed(where, raw, IMPORT_CHECKS)
             if isinstance(line, ExportedBoard):
@@ -545,19 +584,24 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
             if isinstance(line, ExportedEntry):
                 entries += 1
                 continue
-            read = line.submission, line.record, None
-        submission, record, record_json = read
-        prepared.append(_prepared_line(where, submission, record, record_json, exported, prepare))
+            record = line.record
+            done = _prepared_line(where, line.submission, record, None, exported, prepare)
+        else:
+            submission, record, record_json, span = read
+            done = _prepared_line(where, submission, record, record_json, exported, prepare)
+            if done.row.record is record_json:  # stored as the line holds it
+                records.append((len(prepared), start + span.start, start + span.stop))
+        prepared.append(done)
         if keep is not None:
             keep(record)
-    return _Checked(prepared, entries, size)
+    return _Checked(prepared, entries, size, records)
 
 
-def _submission_line(raw: bytes) -> tuple[Submission, Record, str] | None:
+def _submission_line(raw: bytes) -> tuple[Submission, Record, str, slice] | None:
     """A submission line in the shape an export writes it, read as its two parts: its submission,
     and its record with the record's JSON as the line holds it (what the board stores; nothing is
-    written out again). None for any other line, or one that does not read so (read whole then,
-    which names its first problem)."""
+    written out again) and where that JSON lies in the line. None for any other line, or one that
+    does not read so (read whole then, which names its first problem)."""
     if not raw.startswith(_SUBMISSION_LINE):
         return None
     line = raw.rstrip()
@@ -566,10 +610,11 @@ def _submission_line(raw: bytes) -> tuple[Submission, Record, str] | None:
         return None
     # Both parts read as JSON values only where the split is the line's own: a "record" member
     # inside the record leaves the first part holding the record's start after its submission.
-    record_json = line[split + len(_RECORD_MEMBER):-1]
+    span = slice(split + len(_RECORD_MEMBER), len(line) - 1)
+    record_json = line[span]
     try:
         return (_SUBMISSION.validate_json(line[len(_SUBMISSION_LINE):split]),
-                _RECORD.validate_json(record_json, context=IMPORT_CHECKS), record_json.decode())
+                _RECORD.validate_json(record_json, context=IMPORT_CHECKS), record_json.decode(), span)
     except ValidationError:
         return None
 

@@ -54,7 +54,8 @@ def reworded(line: bytes) -> list[bytes]:
 
 def prepared(lines: list[bytes]) -> list[PreparedSubmission]:
     check = functools.partial(prepare_submission, BOARD)
-    return transfer._prepared_chunk("export.jsonl", BOARD, check, list(enumerate(lines, 2))).prepared
+    return transfer._prepared_chunk("export.jsonl", BOARD, check, transfer._lines(
+        "export.jsonl", 1, b"\n".join(line.removesuffix(b"\n") for line in lines))).prepared
 
 
 def without_record_json(found: PreparedSubmission) -> PreparedSubmission:

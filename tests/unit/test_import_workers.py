@@ -27,13 +27,15 @@ TRACK_BOARD = "reInvent2019_track"
 
 @pytest.fixture
 def exported(tmp_path: Path) -> Path:
-    """An export of a board of 40 racers, with copies, a lookalike and a racer's better run."""
+    """An export of a board of 40 racers, with copies, a lookalike, a racer's better run, and an
+    alias beyond ASCII (its line's characters are not its bytes) early in the file."""
     store = SqliteStore(tmp_path / "source.db")
     service = LeaderboardService(store)
     records = [make_record(f"Racer{n:02d}", [(9000 + 37 * n, 100), (9100 + 41 * n, 100),
                                              (9200 + 13 * n, 100)]) for n in range(40)]
     records += [copy_of(records[3], "Copycat"), make_record("Rac3r07", [(20000, 100)]),
-                make_record("Racer05", [(8000, 100), (8100, 100)], model="better")]
+                make_record("Racer05", [(8000, 100), (8100, 100)], model="better"),
+                make_record("Aé-Zoë Ångström", [(12000, 100), (12100, 100), (12200, 100)])]
     service.push(records[0])
     for minute, record in enumerate(records[1:]):  # replayed, so copies are flagged, not refused
         service.import_submission(TRACK_BOARD, ImportedSubmission(
@@ -81,8 +83,8 @@ def test_lines_checked_in_workers_give_the_board_checking_them_here_gives(
             in_workers = imported(exported, tmp_path / "workers.db")
     finally:
         done.set()
-    assert (in_workers.created, in_workers.duplicates) == (here.created, here.duplicates) == (43, 0)
-    assert in_workers.board.participants == 42
+    assert (in_workers.created, in_workers.duplicates) == (here.created, here.duplicates) == (44, 0)
+    assert in_workers.board.participants == 43
     assert rows(tmp_path / "workers.db") == rows(tmp_path / "here.db")
 
 
@@ -146,7 +148,7 @@ def test_the_workers_checking_lines_run_behind_the_process_writing_the_board(
 
     monkeypatch.setattr(transfer, "_checked_chunk", noting_niceness)  # (forked workers have it)
     own = os.nice(0)
-    assert imported(exported, tmp_path / "target.db").created == 43
+    assert imported(exported, tmp_path / "target.db").created == 44
     workers = {int(path.name): int(path.read_text()) for path in noted.iterdir()}
     assert workers and os.getpid() not in workers
     assert set(workers.values()) == {min(own + transfer.WORKER_NICENESS, 19)}
@@ -161,7 +163,7 @@ def test_an_import_leaves_the_cycle_collector_as_it_found_it(
     was = gc.isenabled()
     (gc.enable if enabled else gc.disable)()
     try:
-        assert imported(exported, tmp_path / "target.db").created == 43
+        assert imported(exported, tmp_path / "target.db").created == 44
         assert gc.isenabled() is enabled
     finally:
         (gc.enable if was else gc.disable)()
