@@ -17,7 +17,6 @@ transaction (each an update on condition that it is the racer's earliest time).
 from __future__ import annotations
 
 import zlib
-from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from botocore.exceptions import ClientError
@@ -25,6 +24,7 @@ from botocore.exceptions import ClientError
 from ...errors import StoreBusy
 from ..aws_errors import code_of
 from ..base import ImportBatch, ImportedRow, ImportWritten, IndexedRun, new_rows
+from .batches import put_all
 from .codecs import (
     audit_item,
     author_update,
@@ -41,7 +41,7 @@ from .codecs import (
 )
 from .ranks import LAZY_BUILD_MAX_RACERS, TRANSACT_ITEMS, RankState
 from .retries import MAX_ATTEMPTS, backoff
-from .transaction import BATCH_WRITE_ITEMS, Slots
+from .transaction import Slots
 
 if TYPE_CHECKING:
     from .codecs import Item
@@ -73,8 +73,9 @@ class BulkWrite:
         present = self.store.present_submissions(
             self.board_id, [(row.racer_key, row.submission_id) for row in self.batch.rows])
         rows = new_rows(self.batch.rows, present)
-        self._put_all([{"board": text(self.board_id), "sk": text(record_sk(row.submission_id)),
-                        "record": {"B": zlib.compress(row.record.encode())}} for row in rows])
+        put_all(self.client, self.table, [
+            {"board": text(self.board_id), "sk": text(record_sk(row.submission_id)),
+             "record": {"B": zlib.compress(row.record.encode())}} for row in rows])
         created = improved = 0
         for part, claims in self._parts(rows):
             stored, better = self._commit(part, claims)
@@ -82,8 +83,9 @@ class BulkWrite:
             improved += better
         for run in self.batch.runs:
             self._index_author(run)
-        self._put_all([_near_item(self.board_id, run) for run in self.batch.runs if run.laps_ms])
-        self._put_all([audit_item(event) for event in self.batch.audit])
+        put_all(self.client, self.table,
+                [_near_item(self.board_id, run) for run in self.batch.runs if run.laps_ms])
+        put_all(self.client, self.table, [audit_item(event) for event in self.batch.audit])
         return ImportWritten(created=created, improved=improved)
 
     def _parts(self, rows: list[ImportedRow]) -> list[tuple[list[ImportedRow], list[Item]]]:
@@ -210,19 +212,6 @@ class BulkWrite:
         except ClientError as error:
             if code_of(error) != "ConditionalCheckFailedException":
                 raise
-
-    def _put_all(self, items: Sequence[Item]) -> None:
-        for start in range(0, len(items), BATCH_WRITE_ITEMS):
-            pending: Any = {self.table: [{"PutRequest": {"Item": item}}
-                                         for item in items[start:start + BATCH_WRITE_ITEMS]]}
-            attempt = 0
-            while pending:
-                if attempt:
-                    backoff(attempt)
-                pending = self.client.batch_write_item(RequestItems=pending).get(
-                    "UnprocessedItems") or None
-                attempt += 1
-
 
 def _claim_names(claims: list[Item]) -> list[str]:
     return [f"claim {item['sk']['S']}" for item in claims]

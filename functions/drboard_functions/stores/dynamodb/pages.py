@@ -26,6 +26,7 @@ from botocore.exceptions import BotoCoreError, ClientError
 
 from ..aws_errors import translated
 from ..pages import StoredPage
+from .batches import put_all
 from .keys import BOARD_SK, key, page_partition, text
 
 if TYPE_CHECKING:
@@ -90,8 +91,7 @@ class DynamoDbPageShelf:
         if not items:
             return
         try:
-            self.client.batch_write_item(RequestItems={self.table: [
-                {"PutRequest": {"Item": item}} for item in items]})
+            put_all(self.client, self.table, items)
         except (ClientError, BotoCoreError) as error:
             logger.warning("the pages of %s were not kept: %s", board_id, error)
 

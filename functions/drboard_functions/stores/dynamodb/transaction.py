@@ -37,6 +37,7 @@ from ...models.domain import (
 )
 from ..aws_errors import UNAVAILABLE_RETRY_AFTER_S, cancellation_codes, code_of, store_error
 from ..base import AliasConflict, BoardChanged, FingerprintTaken, LimitReached, LookalikeTaken
+from .batches import put_all
 from .codecs import (
     ALIAS_PARTITION,
     BANS_SK,
@@ -71,7 +72,6 @@ if TYPE_CHECKING:
     from .store import DynamoDbStore
 
 FAILED = "ConditionalCheckFailed"
-BATCH_WRITE_ITEMS = 25
 #: DynamoDB's bound on the items of one transaction.
 MAX_TRANSACTION_ITEMS = 100
 
@@ -369,13 +369,8 @@ class PushTransaction:
         try:
             for run in self.runs:
                 self.store.index_author(self.submission, run.fingerprint)
-            nears = [near_item(run, self.submission) for run in self.runs if run.laps_ms]
-            for start in range(0, len(nears), BATCH_WRITE_ITEMS):
-                pending: Any = {self.table: [{"PutRequest": {"Item": item}}
-                                             for item in nears[start:start + BATCH_WRITE_ITEMS]]}
-                while pending:
-                    pending = self.store.client.batch_write_item(
-                        RequestItems=pending).get("UnprocessedItems") or None
+            put_all(self.store.client, self.table,
+                    [near_item(run, self.submission) for run in self.runs if run.laps_ms])
         except (ClientError, BotoCoreError, StoreError):
             pass
 
