@@ -27,6 +27,7 @@ from drboard_functions.display import (
     gap,
     method_label,
     percent,
+    plural,
     seconds,
     when,
 )
@@ -231,7 +232,7 @@ def board_csv(page: BoardPage) -> str:
 def board_markdown(page: BoardPage) -> str:
     board = page.board
     lines = [f"## {board.title} ({board.board_id})", "",
-             f"{board.participants} racers · {method_label(board)}", "",
+             f"{plural(board.participants, 'racer')} · {method_label(board)}", "",
              "| Rank | Racer | Model | Time | Gap | Laps | Design |",
              "|---:|---|---|---:|---:|---:|---|"]
     for entry in page.entries:
@@ -495,10 +496,6 @@ def _minute_after(moment: datetime) -> str:
     if moment.second or moment.microsecond:
         moment = moment.replace(second=0, microsecond=0) + timedelta(minutes=1)
     return f"{moment:%b %d %H:%M} UTC"
-
-
-def plural(count: int, word: str, words: str | None = None) -> str:
-    return f"{count} {word if count == 1 else words or word + 's'}"
 
 
 def deleted_line(board: BoardView) -> Text:

@@ -15,7 +15,7 @@ from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
 from drboard_functions import conditions
-from drboard_functions.display import design_summary, gap, method_label, percent, seconds
+from drboard_functions.display import design_summary, gap, method_label, percent, plural, seconds
 from rich.table import Table
 from rich.text import Text
 
@@ -68,7 +68,7 @@ def board_table(page: BoardPage, width: int = 120) -> Table:
     """The standings; on a narrow terminal the submission time and model name give way."""
     board = page.board
     wide = width >= WIDE
-    caption = f"{board.participants} racers · {method_label(board)}"
+    caption = f"{plural(board.participants, 'racer')} · {method_label(board)}"
     if board.conditions is not None:
         caption += f" · evaluated with {conditions.summary(board.conditions)}"
     caption += " · times include penalties"

@@ -27,6 +27,7 @@ from pathlib import Path
 
 from drboard_assembler import AssemblyError, Overrides, Record, assemble, evaluation_files, planned_trials
 from drboard_functions import errors as domain
+from drboard_functions.display import plural
 from drboard_functions.models.views import PushAccepted, PushReceipt
 from rich.console import Console
 from rich.status import Status
@@ -298,12 +299,12 @@ class Watcher:
     def _idle_text(self) -> str:
         text = f"Watching {self.folder} · {self.summary.pushed} pushed"
         if self._pending:
-            text += f" · {_count(len(self._pending), 'evaluation')} being written"
+            text += f" · {plural(len(self._pending), 'evaluation')} being written"
         return text + f" · next look at {self._at(self.interval_s)}"
 
     def _summary_text(self) -> str:
         summary = self.summary
-        parts = [f"{_count(summary.pushed, 'evaluation')} pushed"]
+        parts = [f"{plural(summary.pushed, 'evaluation')} pushed"]
         if summary.already_on_board:
             parts.append(f"{summary.already_on_board} already on the board")
         if summary.skipped:
@@ -313,5 +314,3 @@ class Watcher:
         return f"Stopped watching {self.folder}: {', '.join(parts)}."
 
 
-def _count(number: int, noun: str) -> str:
-    return f"{number} {noun}" + ("" if number == 1 else "s")

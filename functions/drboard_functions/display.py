@@ -114,6 +114,11 @@ def points_rule(points: PointsTable, best_of: int | None, rounds: list[RoundView
     return " · ".join(parts) + "."
 
 
+def plural(count: int, word: str, words: str | None = None) -> str:
+    """``1 racer``, ``2 racers`` (``words``: a plural that is not ``word`` + s)."""
+    return f"{count} {word if count == 1 else words or word + 's'}"
+
+
 def ordinal(rank: int) -> str:
     """``1`` -> ``1st``, ``12`` -> ``12th``, ``22`` -> ``22nd``."""
     suffix = "th" if 10 <= rank % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(rank % 10, "th")

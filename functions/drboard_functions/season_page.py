@@ -21,7 +21,7 @@ from typing import Any
 from urllib.parse import urlencode
 
 from . import web
-from .display import ordinal, points_rule, points_text
+from .display import ordinal, plural, points_rule, points_text
 from .models.domain import BoardStatus
 from .models.seasons import RoundView, SeasonStandings, SeasonSummary, Standing
 from .templating import environment
@@ -87,14 +87,15 @@ def season_page(view: SeasonStandings, *, screen: bool = False, part: int = 1,
                   if season.final.from_round else "the season")
         final = {"title": season.final.title, "path": web.board_path(season.final.board_id),
                  "text": f"The final takes the top {season.final.top} of {source}"}
-    racers = len(view.standings) if view.next_cursor is None else f"{len(view.standings)}+"
+    racers = (plural(len(view.standings), "racer") if view.next_cursor is None
+              else f"{len(view.standings)}+ racers")
     html = _render(
         "season.html", heading=season.title, screen=screen, season=season,
         fit=_fit(len(season.rounds)) if screen else "",
         screen_script=_screen_script(), hold_s=hold_s, next_screen=next_screen, shown=shown,
         status_class=season.status.lower(), status_text="Running" if season.status == "OPEN" else "Ended",
         subtitle=" · ".join(bit for bit in (
-            _count(len(season.rounds), "round"), f"{racers} racers", shown) if bit),
+            plural(len(season.rounds), "round"), racers, shown) if bit),
         points_rule=points_rule(season.points, season.best_of, season.rounds),
         final=final, rounds=[_round(r) for r in season.rounds],
         rows=[_row(s) for s in rows],
@@ -138,7 +139,7 @@ def _share(view: SeasonStandings, origin: str, path: str) -> web.Share:
     card = web.season_card_path(season.season_id)
     return web.Share(
         title=f"{season.title}: " + ("final standings" if season.status == "CLOSED" else "standings"),
-        description=(said or "No points yet") + f" · {_count(len(season.rounds), 'round')}.",
+        description=(said or "No points yet") + f" · {plural(len(season.rounds), 'round')}.",
         url=origin + path, image=origin + card, alt=f"Podium card of {season.title}: {said or 'no one yet'}",
         card_path=card, svg_path=web.season_card_path(season.season_id, "svg"))
 
@@ -158,8 +159,6 @@ def _fit(rounds: int) -> str:
     return next((fit for most, fit in _FITS if rounds <= most), _WIDEST)
 
 
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def _round_number(rounds: list[RoundView], board_id: str | None) -> str:
@@ -174,7 +173,7 @@ def _round(r: RoundView) -> dict[str, Any]:
     return {"number": r.number, "title": r.title, "path": None if missing else web.board_path(r.board_id),
             "weight_text": f"×{r.weight:g}" if r.weight != 1 else "", "always_counts": r.always_counts,
             "state": "board deleted: its results do not count" if missing else
-                     f"{states[BoardStatus(r.status)]}, {_count(r.participants, 'racer')}"}
+                     f"{states[BoardStatus(r.status)]}, {plural(r.participants, 'racer')}"}
 
 
 def _row(standing: Standing) -> dict[str, Any]:

@@ -72,6 +72,17 @@ def test_pull_csv_and_markdown(runner: CliRunner, tmp_path: Path) -> None:
     assert out.count("\n| ") == 3  # header and two entries
 
 
+@pytest.mark.parametrize("form", ["table", "markdown"])
+def test_the_standings_count_one_racer_as_one_racer(runner: CliRunner, form: str) -> None:
+    code, _, err = run(runner, "push", EXAMPLES[0])
+    assert code == 0, err
+    _, out, _ = run(runner, "pull", "--track", "reInvent2019", "--format", form)
+    assert "1 racer ·" in out and "1 racers" not in out
+    push_examples(runner)
+    _, out, _ = run(runner, "pull", "--track", "reInvent2019", "--format", form)
+    assert f"{len(COUNTER_CLOCKWISE)} racers ·" in out
+
+
 def test_top_limits_the_entries(runner: CliRunner) -> None:
     push_examples(runner)
     _, out, _ = run(runner, "pull", "--track", "reInvent2019", "--top", "3", "--format", "json")

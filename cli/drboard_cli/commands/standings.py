@@ -127,7 +127,7 @@ def _track_page(client: BoardClient, track: str, board_id: str, top: int) -> Any
         others = _boards_of_track(client, track)
         if not others:
             raise
-        from ..render import plural
+        from drboard_functions.display import plural
 
         listing = ", ".join(f"{b.board_id} ({b.title}, {plural(b.participants, 'racer')})"
                             for b in others[:10])
