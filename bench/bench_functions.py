@@ -603,11 +603,22 @@ def cold_starts(server: DynamoDbLocal, sandbox: Sandbox,
     return samples, floors
 
 
+def round_ratios(samples: list[float], floors: list[Timing], *, cpu: bool = False) -> list[float]:
+    """Each round's ratio of a sample to the floor run in the same round: a machine whose speed
+    drifts between rounds moves both alike."""
+    return [sample / (floor.cpu_ms if cpu else floor.ms)
+            for sample, floor in zip(samples, floors, strict=True)]
+
+
 def paired(samples: list[float], floors: list[Timing], *, cpu: bool = False) -> float:
-    """The median of each round's ratio of a sample to the floor run in the same round: a
-    machine whose speed drifts between rounds moves both alike."""
-    return statistics.median(sample / (floor.cpu_ms if cpu else floor.ms)
-                             for sample, floor in zip(samples, floors, strict=True))
+    """The median of the rounds' ratios (:func:`round_ratios`)."""
+    return statistics.median(round_ratios(samples, floors, cpu=cpu))
+
+
+def quartiles(ratios: list[float]) -> str:
+    """The spread of the rounds' ratios, for telling a figure near its target from noise."""
+    low, _, high = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else ratios * 3
+    return f"the middle half of the rounds' ratios {low:.2f}-{high:.2f} x"
 
 
 # ---- built size -------------------------------------------------------------------------------
@@ -733,7 +744,8 @@ def main(argv: list[str] | None = None) -> int:
         report.add(f"cold start of the {kind} function / its floor", paired(samples["first"], own),
                    "x", limit=COLD_START_OVER_FLOOR_TARGET,
                    note=(f"median of the rounds' ratios, each against the floor run in the same "
-                         f"round; p50s {p50:.0f} / {own_p50:.0f} ms; its floor: "
+                         f"round ({quartiles(round_ratios(samples['first'], own))}); "
+                         f"p50s {p50:.0f} / {own_p50:.0f} ms; its floor: "
                          + (f"the same output ({OWN_FLOOR[kind]}); {p50 / floor_p50:.2f} x the "
                             "floor of a Query alone" if kind in floors else
                             "the floor above (the same answer from one read)")))
