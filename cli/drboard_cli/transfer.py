@@ -58,8 +58,9 @@ if TYPE_CHECKING:
 #: Prepares an exported submission (its record, its first time, and the record's JSON as the line
 #: holds it, or None) for the board imported into (``loading.prepare_submission``).
 Prepare = Callable[[Record, datetime, str | None], "PreparedSubmission"]
-#: Archives a prepared submission's record, where the board archives (``BulkImport.keep``).
-Keep = Callable[[Record], None]
+#: Archives a prepared submission's record as the board stores it, where the board archives
+#: (``BulkImport.keep``).
+Keep = Callable[["PreparedSubmission"], None]
 
 #: Starts a phase of a long command, with its total (None: unknown): how to say it advanced.
 Phase = Callable[[str, int | None], Callable[[int], None]]
@@ -593,7 +594,7 @@ def _prepared_chunk(name: str, exported: Board, prepare: Prepare,
                 records.append((len(prepared), start + span.start, start + span.stop))
         prepared.append(done)
         if keep is not None:
-            keep(record)
+            keep(done)
     return _Checked(prepared, entries, size, records)
 
 

@@ -79,7 +79,7 @@ def submit(store: BoardStore, record: Record, when: datetime, board: Board | Non
     if store.get_board(board.board_id) is None:
         store.create_board(board)
     submission, entry = write_for(record, board, when)
-    return store.record_submission(submission, record, entry, limits,
+    return store.record_submission(submission, record.model_dump_json(), entry, limits,
                                    fingerprints=evaluation_fingerprints(record))
 
 
@@ -195,7 +195,7 @@ class StoreContract(SeasonStoreContract):
         record = make_record("Ada", lap(12000))
         store.create_board(make_board())
         submission, entry = write_for(record, make_board(), at(1))
-        outcome = store.record_submission(submission, record, entry)
+        outcome = store.record_submission(submission, record.model_dump_json(), entry)
         assert outcome == WriteOutcome(duplicate=False, improved=True, entry=entry)
         assert store.get_entry(TRACK, "ada") == entry
         assert participants(store) == 1
@@ -329,7 +329,7 @@ class StoreContract(SeasonStoreContract):
         record = make_record("Ada Lovelace", [(12000, 100), (8000, 55)])
         submission, entry = write_for(record, make_board(), at(1))
         store.create_board(make_board())
-        store.record_submission(submission, record, entry)
+        store.record_submission(submission, record.model_dump_json(), entry)
         assert store.history("ada lovelace") == [submission]
 
     def test_history_of_an_unknown_racer_is_empty(self, store: BoardStore) -> None:
@@ -730,7 +730,7 @@ class StoreContract(SeasonStoreContract):
         store.create_board(board)
         record = make_record("Ada", lap(9000))
         submission, entry = write_for(record, board, at(0))
-        store.record_submission(submission, record, entry, audit=event(0))
+        store.record_submission(submission, record.model_dump_json(), entry, audit=event(0))
         assert [e.action for e in store.audit(TRACK, None, 10).events] == ["push"]
 
     def test_the_audit_trail_pages_in_time_order(self, store: BoardStore) -> None:

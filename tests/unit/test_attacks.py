@@ -196,7 +196,8 @@ def test_the_author_takes_their_run_back_from_a_copy_stored_before_the_rule(
     assert final is not None
     copy = edited(leader(), "Copycat", lambda laps: None)
     submission, entry = scored_write(copy, final.board, datetime(2026, 3, 2, tzinfo=UTC))
-    store.record_submission(submission, copy, entry, fingerprints=evaluation_fingerprints(copy))
+    store.record_submission(submission, copy.model_dump_json(), entry,
+                            fingerprints=evaluation_fingerprints(copy))
     for board_id in ("club-final", TRACK):
         assert service.recheck_page(board_id).next_cursor is None
     receipt = service.push(leader(), "club-final", caller=BLAZE)
@@ -242,7 +243,7 @@ def test_a_recheck_fills_in_the_fingerprints_of_an_existing_board(
                                       created_at=datetime(2026, 1, 1, tzinfo=UTC)))
     old = leader()
     submission, entry = scored_write(old, stored.board, datetime(2026, 1, 2, tzinfo=UTC))
-    store.record_submission(submission, old, entry)
+    store.record_submission(submission, old.model_dump_json(), entry)
     service.push(edited(leader(), "Early", renumbered), caller=COPIER)  # slips through: no index
     page = service.recheck_page(TRACK)
     assert [(f.racer, f.flag) for f in page.flagged] == [("Early", "copied-run")]
@@ -420,7 +421,7 @@ def hostile_board(db: Path) -> None:
     fields["design"]["sensors"] = ["CAM\x1b]0;pwned\x07\x1b[2J"]
     record = Record.model_validate(fields, context={"stored": True})
     submission, entry = scored_write(record, board, datetime(2026, 1, 2, tzinfo=UTC))
-    store.record_submission(submission, record, entry)
+    store.record_submission(submission, record.model_dump_json(), entry)
     store.close()
 
 
@@ -453,7 +454,7 @@ def test_pull_csv_neutralises_cells_a_spreadsheet_would_run(tmp_path: Path) -> N
                                                                       "model_name": model}
         record = Record.model_validate(fields, context={"stored": True})
         submission, entry = scored_write(record, board, datetime(2026, 1, 2, tzinfo=UTC))
-        store.record_submission(submission, record, entry)
+        store.record_submission(submission, record.model_dump_json(), entry)
     store.close()
     result = CliRunner().invoke(cli, ["--db", db, "pull", "--track", "reInvent2019", "--format", "csv"])
     assert result.exit_code == 0

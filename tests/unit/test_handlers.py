@@ -258,7 +258,7 @@ def test_the_archive_writes_the_record_as_json(aws: None) -> None:
     s3 = boto3.client("s3", region_name=REGION)
     s3.create_bucket(Bucket="archive", CreateBucketConfiguration={"LocationConstraint": REGION})
     record = event_record()
-    S3Archive("archive", client=s3).put("reInvent2019_track", record)
+    S3Archive("archive", client=s3).put("reInvent2019_track", record.submission_id, record.model_dump_json())
     key = f"records/reInvent2019_track/{record.submission_id}.json"
     stored = s3.get_object(Bucket="archive", Key=key)
     assert stored["ContentType"] == "application/json"

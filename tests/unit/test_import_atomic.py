@@ -196,7 +196,7 @@ def test_a_write_refused_inside_held_writes_undoes_only_itself(tmp_path: Path) -
         lookalike = make_record("0llie", [(9500, 100)])
         submission, entry = scored_write(lookalike, board.board, datetime.now(UTC))
         with pytest.raises(LookalikeTaken):  # after its fingerprint is claimed
-            store.record_submission(submission, lookalike, entry, fingerprints=["its-run"],
+            store.record_submission(submission, lookalike.model_dump_json(), entry, fingerprints=["its-run"],
                                     skeleton=confusable_skeleton("0llie"))
         service.push(make_record("Bob", [(9700, 100)]))
     assert boards_seen_by_another_connection(store) == 1

@@ -125,12 +125,14 @@ class BulkImport:
         """Check an exported submission for the board and prepare what importing it writes
         (``prepare_submission``); the record is archived too, where the board archives."""
         prepared = prepare_submission(self.board, item.record, item.submitted_at)
-        self.keep(item.record)
+        self.keep(prepared)
         return prepared
 
-    def keep(self, record: Record) -> None:
-        """Archive a prepared submission's record, where the board archives records."""
-        keep_in_archive(self.archive, self.board.board_id, record)
+    def keep(self, prepared: PreparedSubmission) -> None:
+        """Archive a prepared submission's record as the board stores it, where the board
+        archives records."""
+        keep_in_archive(self.archive, self.board.board_id, prepared.row.submission_id,
+                        prepared.row.record)
 
     @property
     def holds_whole(self) -> bool:

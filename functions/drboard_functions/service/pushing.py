@@ -80,7 +80,7 @@ class Pushing:
         nothing and is answered whatever the board's window and limits (it never counts).
         ``caller`` is who pushes: a racer may push only as the alias their sign-in holds (their
         first stored push claims it); organisers push as anyone; None (unsigned) is refused."""
-        check_record_size(record)
+        record_json = check_record_size(record)
         if caller is None:
             raise NotSignedIn("sign in to push: `drboard login` for a deployed board, "
                               "`drboard join CODE` for a `drboard serve` board")
@@ -106,7 +106,7 @@ class Pushing:
             verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
             submission, entry = scored_write(record, board, now, verdict.flags)
             if not archived:
-                keep_in_archive(self.archive, board_id, record)
+                keep_in_archive(self.archive, board_id, record.submission_id, record_json)
                 archived = True
             for fingerprint in verdict.take_over:
                 self.store.hand_over_fingerprint(board_id, fingerprint, key)
@@ -118,7 +118,8 @@ class Pushing:
                                       submission_id=record.submission_id, detail=record.model_name)
             try:
                 outcome = self.store.record_submission(
-                    submission, record, entry, limits, fingerprints=[p.fingerprint for p in prints],
+                    submission, record_json, entry, limits,
+                    fingerprints=[p.fingerprint for p in prints],
                     audit=audit, runs=prints, claim=claim, skeleton=skeleton)
             except BoardChanged:
                 continue  # a ban, a window or a limit changed meanwhile: check again
@@ -313,19 +314,21 @@ def check_not_banned(board: Board, bans: EventBans, racer: str, caller: Caller) 
         raise Banned(f"{racer!r} is banned from every board of this event by its organisers")
 
 
-def keep_in_archive(archive: RecordArchive | None, board_id: str, record: Record) -> None:
-    """Keep the record in the archive before the push commits: a failed archive write
+def keep_in_archive(archive: RecordArchive | None, board_id: str, submission_id: str,
+                    record_json: str) -> None:
+    """Keep the record (its JSON) in the archive before the push commits: a failed archive write
     stores nothing (a store error, 503). Its key is the record's content hash and the put is
     conditional, so a push refused or retried afterwards leaves at most one object no row
     refers to, and no new version."""
     if archive is not None:
-        archive.put(board_id, record)
+        archive.put(board_id, submission_id, record_json)
 
 
 def check_record_size(record: Record) -> str:
     """Every board, embedded or in the cloud, holds a record to the same bound in bytes (its
     JSON, as the assembler measures it); the record's model bounds the rest (string lengths,
-    laps, runs, curve points). Returns that JSON."""
+    laps, runs, curve points). Returns that JSON, which the push stores and archives as it is
+    (a record's JSON is written once: ~0.1 ms for a record of 27 KB)."""
     return check_record_json_size(record.model_dump_json())
 
 

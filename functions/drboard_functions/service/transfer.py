@@ -120,13 +120,13 @@ class Transfer:
         board = self.keeper.require(board_id).board
         record = item.record
         check_belongs(record, board)
-        check_record_size(record)
+        record_json = check_record_size(record)
         submission, entry = scored_write(record, board, item.submitted_at)
         audit = self.keeper.event(board_id, "import", caller, self.clock(), racer=record.racer,
                                   submission_id=record.submission_id)
         if self.store.get_submission(board_id, submission.racer_key, record.submission_id) is None:
-            keep_in_archive(self.archive, board_id, record)
-        outcome = self.store.record_submission(submission, record, entry, audit=audit)
+            keep_in_archive(self.archive, board_id, record.submission_id, record_json)
+        outcome = self.store.record_submission(submission, record_json, entry, audit=audit)
         if not outcome.duplicate:
             self._check_copies(submission, record, caller)
         return ImportReceipt(status="duplicate" if outcome.duplicate else "created",

@@ -324,14 +324,15 @@ class BoardStore(NoticeStore, Protocol):
         """Up to ``limit`` boards, deleted ones included, by id, after the store's page token
         ``after`` (ValueError when it is not one the store gave out)."""
 
-    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+    def record_submission(self, submission: Submission, record_json: str, entry: Entry,
                           limits: SubmissionLimits | None = None,
                           fingerprints: Sequence[str] = (),
                           audit: AuditEvent | None = None, *,
                           runs: Sequence[RunPrint] = (), claim: AliasClaim | None = None,
                           skeleton: str | None = None) -> WriteOutcome:
-        """Atomically: store the submission unless its id is already on the board (a duplicate,
-        which changes nothing and is never refused), and make ``entry`` the racer's entry if it
+        """Atomically: store the submission, with its record as ``record_json`` holds it (the
+        record's JSON, as the service wrote it once), unless its id is already on the board (a
+        duplicate, which changes nothing and is never refused), and make ``entry`` the racer's entry if it
         has a strictly lower rank key than the current one (a better score, or an equal score
         achieved earlier); a changed entry bumps the board's version in the same write. With
         ``limits``, a new submission is refused with LimitReached, and
@@ -541,6 +542,6 @@ class BoardStore(NoticeStore, Protocol):
 
 
 class RecordArchive(Protocol):
-    def put(self, board_id: str, record: Record) -> None:
-        """Keep the raw record of a submission (S3 in the cloud), before the push commits;
-        a failure raises a store error and the push stores nothing."""
+    def put(self, board_id: str, submission_id: str, record_json: str) -> None:
+        """Keep the raw record of a submission (its JSON, S3 in the cloud), before the push
+        commits; a failure raises a store error and the push stores nothing."""

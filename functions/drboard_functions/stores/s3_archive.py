@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING
 from urllib.parse import quote
 
 from botocore.exceptions import BotoCoreError, ClientError
-from drboard_assembler.record import Record
 
 from ..errors import StoreBusy, StoreUnavailable
 from .aws_errors import UNAVAILABLE_RETRY_AFTER_S, code_of, store_error
@@ -53,14 +52,14 @@ class S3Archive:
     def key(board_id: str, submission_id: str) -> str:
         return f"{PREFIX}{quote(board_id, safe='')}/{quote(submission_id, safe='')}.json"
 
-    def put(self, board_id: str, record: Record) -> None:
+    def put(self, board_id: str, submission_id: str, record_json: str) -> None:
         """Keep the record; any failure is a store error (StoreBusy when S3 throttles,
         StoreUnavailable otherwise), so the push stores nothing and answers 503."""
         try:
             self._client.put_object(
                 Bucket=self.bucket,
-                Key=self.key(board_id, record.submission_id),
-                Body=record.model_dump_json().encode("utf-8"),
+                Key=self.key(board_id, submission_id),
+                Body=record_json.encode("utf-8"),
                 ContentType="application/json",
                 IfNoneMatch="*",
             )

@@ -384,7 +384,7 @@ class SqliteStore(SqliteSeasons):
 
     # ---- submissions ----------------------------------------------------------------------
 
-    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+    def record_submission(self, submission: Submission, record_json: str, entry: Entry,
                           limits: SubmissionLimits | None = None,
                           fingerprints: Sequence[str] = (),
                           audit: AuditEvent | None = None, *,
@@ -409,7 +409,7 @@ class SqliteStore(SqliteSeasons):
                 "INSERT INTO submissions VALUES (?, ?, ?, ?, ?, ?)",
                 (submission.board_id, submission.submission_id, submission.racer_key,
                  ranking.timestamp(submission.submitted_at), submission.model_dump_json(),
-                 record.model_dump_json()),
+                 record_json),
             )
             if current is not None and current.rank_key <= entry.rank_key:
                 return WriteOutcome(duplicate=False, improved=False, entry=current)

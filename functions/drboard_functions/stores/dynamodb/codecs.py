@@ -49,8 +49,6 @@ from __future__ import annotations
 import zlib
 from typing import TYPE_CHECKING, Any
 
-from drboard_assembler.record import Record
-
 from ... import ranking
 from ...models.domain import (
     AliasClaim,
@@ -227,9 +225,9 @@ def alias_items(claim: AliasClaim) -> list[Item]:
             {"board": text(ALIAS_PARTITION), "sk": text(f"P#{claim.principal}"), "data": data}]
 
 
-def record_item(board_id: str, record: Record) -> Item:
-    return {"board": text(board_id), "sk": text(record_sk(record.submission_id)),
-            "record": {"B": zlib.compress(record.model_dump_json().encode())}}
+def record_item(board_id: str, submission_id: str, record_json: str) -> Item:
+    return {"board": text(board_id), "sk": text(record_sk(submission_id)),
+            "record": {"B": zlib.compress(record_json.encode())}}
 
 
 def skeleton_item(board_id: str, skeleton: str, racer_key: str) -> Item:

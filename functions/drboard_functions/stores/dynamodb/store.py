@@ -212,13 +212,13 @@ class DynamoDbStore(DynamoDbSeasons):
 
     # ---- submissions ----------------------------------------------------------------------
 
-    def record_submission(self, submission: Submission, record: Record, entry: Entry,
+    def record_submission(self, submission: Submission, record_json: str, entry: Entry,
                           limits: SubmissionLimits | None = None,
                           fingerprints: Sequence[str] = (),
                           audit: AuditEvent | None = None, *,
                           runs: Sequence[RunPrint] = (), claim: AliasClaim | None = None,
                           skeleton: str | None = None) -> WriteOutcome:
-        return PushTransaction(self, submission, record, entry, limits, fingerprints, audit,
+        return PushTransaction(self, submission, record_json, entry, limits, fingerprints, audit,
                                runs=runs, claim=claim, skeleton=skeleton).run()
 
     # ---- copies and lookalikes ------------------------------------------------------------

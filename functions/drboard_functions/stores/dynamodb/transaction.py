@@ -22,7 +22,6 @@ from datetime import timedelta
 from typing import TYPE_CHECKING, Any
 
 from botocore.exceptions import BotoCoreError, ClientError
-from drboard_assembler.record import Record
 
 from ... import ranking
 from ...errors import BoardNotFound, StoreBusy, StoreError, StoreUnavailable
@@ -125,14 +124,14 @@ def with_settings(change: TransactWriteItemTypeDef, settings: int | None) -> Tra
 
 
 class PushTransaction:
-    def __init__(self, store: DynamoDbStore, submission: Submission, record: Record, entry: Entry,
+    def __init__(self, store: DynamoDbStore, submission: Submission, record_json: str, entry: Entry,
                  limits: SubmissionLimits | None, fingerprints: Sequence[str],
                  audit: AuditEvent | None, *, runs: Sequence[RunPrint] = (),
                  claim: AliasClaim | None = None, skeleton: str | None = None) -> None:
         self.store = store
         self.table = store.table
         self.submission = submission
-        self.record = record
+        self.record_json = record_json
         self.entry = entry
         self.limits = limits
         self.fingerprints = fingerprints
@@ -231,7 +230,8 @@ class PushTransaction:
                                          "Item": submission_item(self.submission),
                                          "ConditionExpression": "attribute_not_exists(sk)"}})
         slots.add("record", {"Put": {"TableName": self.table,
-                                     "Item": record_item(board_id, self.record)}})
+                                     "Item": record_item(board_id, self.submission.submission_id,
+                                                         self.record_json)}})
         slots.add("tally", {"Update": self._count_submission()})
         slots.extend("fingerprint", [{"Put": {
             "TableName": self.table, "Item": fingerprint_item(board_id, f, entry.racer_key),
