@@ -21,6 +21,7 @@ from drboard_functions.errors import DomainError
 from drboard_functions.models.requests import BoardSpec
 from drboard_functions.service import LeaderboardService, racer_key
 from drboard_functions.stores.dynamodb import DynamoDbStore
+from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
 from moto import mock_aws
 
@@ -118,6 +119,30 @@ def test_an_export_imported_into_dynamodb_shows_what_its_board_showed(seed: int,
                                      clock=Clock())
         one_at_a_time(service, export)
         assert shown(service) == expected
+
+
+def test_an_import_archives_each_record_as_the_board_keeps_it(tmp_path: Path) -> None:
+    """A record kept by a board of an earlier version (without the fields later assemblers
+    write, null when empty) is imported as its line holds it, and archived the same: the
+    archive holds the bytes the board keeps, not the record written out again."""
+    source = LeaderboardService(SqliteStore(tmp_path / "exported.db"), clock=Clock())
+    record = make_record("Ada", [(9000, 100), (9100, 100), (9200, 100)])
+    source.push(record)
+    out = io.BytesIO()
+    transfer.write_export(source, record.track, out)
+    earlier = out.getvalue().replace(b',"conditions":null', b"")
+    assert earlier != out.getvalue()
+    with mock_aws():
+        client = boto3.client("dynamodb", region_name=REGION)
+        s3 = boto3.client("s3", region_name=REGION)
+        s3.create_bucket(Bucket="archive", CreateBucketConfiguration={"LocationConstraint": REGION})
+        store = DynamoDbStore(create_board_table(client, "boards"), client)
+        service = LeaderboardService(store, clock=Clock(), archive=S3Archive("archive", client=s3))
+        transfer.load_export(service, "export.jsonl", io.BytesIO(earlier), None)
+        [(_, kept)] = store.exported_submissions(record.track)
+        archived = s3.get_object(Bucket="archive", Key=S3Archive.key(record.track, record.submission_id))
+        assert b'"conditions"' not in kept
+        assert archived["Body"].read() == kept
 
 
 @pytest.mark.parametrize("seed", range(20))

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import sqlite3
+import zlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ from drboard_functions.service import LeaderboardService
 from drboard_functions.stores import dynamodb, sqlite
 from drboard_functions.stores.dynamodb import DynamoDbStore
 from drboard_functions.stores.dynamodb import transaction as push_transaction
+from drboard_functions.stores.dynamodb.codecs import record_sk
 from drboard_functions.stores.s3_archive import S3Archive
 from drboard_functions.stores.sqlite import SqliteStore
 from samtranslator.yaml_helper import yaml_parse
@@ -225,7 +227,11 @@ def test_a_push_whose_archive_fails_answers_503_and_stores_nothing(
     assert push_event()["statusCode"] == 201
     record = Record.model_validate_json(load("push.json")["body"])
     archived = s3.get_object(Bucket="archive", Key=S3Archive.key(record.track, record.submission_id))
-    assert Record.model_validate_json(archived["Body"].read()) == record
+    archived_json = archived["Body"].read()
+    assert Record.model_validate_json(archived_json) == record
+    # the archive holds the very bytes the board keeps of the record
+    kept = next(i for i in stored_items(db) if i["sk"]["S"] == record_sk(record.submission_id))
+    assert zlib.decompress(kept["record"]["B"]) == archived_json
 
 
 def test_a_throttled_archive_answers_503_busy(cloud: tuple[Any, Any],
