@@ -63,8 +63,12 @@ def standings_table(standings: SeasonStandings, width: int = 120) -> Table:
     dim, one not raced a dash. On a wide terminal each round's place shows too."""
     season = standings.season
     wide = width >= 40 + 10 * len(season.rounds)
-    notes = [f"struck: past the best {season.best_of}, not counted"] if season.best_of else []
-    if season.final is not None:
+    # A mark's legend only where the table shows the mark.
+    notes = []
+    if season.best_of and any(not score.counted for s in standings.standings
+                              for score in s.rounds if score.rank is not None):
+        notes.append(f"struck: past the best {season.best_of}, not counted")
+    if season.final is not None and any(s.qualified_for_final for s in standings.standings):
         notes.append(f"{QUALIFIED_MARK}: qualifies for the final ({season.final.board_id})")
     caption = " · ".join(notes) or None
     table = Table(title=f"{season.title} · {season.season_id}", caption=caption, header_style="bold")

@@ -66,6 +66,10 @@ def test_best_of_strikes_the_rounds_that_do_not_count(nights: Drboard) -> None:
     assert [(r["racer"], r["points"], r["r1_counted"], r["r2_counted"]) for r in listed[:2]] == [
         ("Ada", "26", "True", "False"), ("Bo", "26", "False", "True")]
     assert "~~2nd 19~~" in nights.ok("season", "standings", SEASON, "--format", "markdown")
+    assert "struck: past the best 1, not counted" in " ".join(
+        nights.ok("season", "standings", SEASON).split())
+    nights.ok("season", "update", SEASON, "--best-of", "2")  # both rounds count for everyone
+    assert "struck" not in nights.ok("season", "standings", SEASON)
     nights.ok("season", "update", SEASON, "--best-of", "none")
     assert rows(nights.ok("season", "standings", SEASON, "--format", "csv"))[0]["points"] == "45"
 
