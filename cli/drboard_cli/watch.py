@@ -312,5 +312,3 @@ class Watcher:
         if summary.not_complete:
             parts.append(f"{summary.not_complete} not complete yet, not pushed")
         return f"Stopped watching {self.folder}: {', '.join(parts)}."
-
-

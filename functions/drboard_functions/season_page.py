@@ -159,8 +159,6 @@ def _fit(rounds: int) -> str:
     return next((fit for most, fit in _FITS if rounds <= most), _WIDEST)
 
 
-
-
 def _round_number(rounds: list[RoundView], board_id: str | None) -> str:
     found = next((r for r in rounds if r.board_id == board_id), None)
     return f"R{found.number} ({found.title})" if found else str(board_id)

@@ -16,7 +16,6 @@ transaction (each an update on condition that it is the racer's earliest time).
 
 from __future__ import annotations
 
-import zlib
 from typing import TYPE_CHECKING, Any
 
 from botocore.exceptions import ClientError
@@ -33,7 +32,7 @@ from .codecs import (
     key,
     lane_partition,
     near_sk,
-    record_sk,
+    record_item,
     skeleton_item,
     submission_sk,
     tally_sk,
@@ -73,9 +72,8 @@ class BulkWrite:
         present = self.store.present_submissions(
             self.board_id, [(row.racer_key, row.submission_id) for row in self.batch.rows])
         rows = new_rows(self.batch.rows, present)
-        put_all(self.client, self.table, [
-            {"board": text(self.board_id), "sk": text(record_sk(row.submission_id)),
-             "record": {"B": zlib.compress(row.record.encode())}} for row in rows])
+        put_all(self.client, self.table,
+                [record_item(self.board_id, row.submission_id, row.record) for row in rows])
         created = improved = 0
         for part, claims in self._parts(rows):
             stored, better = self._commit(part, claims)
