@@ -95,7 +95,8 @@ class SeasonStoreContract:
                           {"jan": link(), "final": link(final=True)})
         store.save_season(season(version=2, final="final"), {"jan": None})
         for board_id in ("jan", "final"):
-            for stored in (store.get_board(board_id), store.push_reads(board_id, "ada", "0" * 64).board):
+            read = store.push_reads(board_id, "ada", "0" * 64, [], 5)
+            for stored in (store.get_board(board_id), read.board):
                 assert stored is not None and stored.maybe_in_a_season, board_id
 
     def test_a_board_lists_every_season_it_belongs_to_by_id(self, store: BoardStore) -> None:

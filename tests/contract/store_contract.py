@@ -215,20 +215,42 @@ class StoreContract(SeasonStoreContract):
     def test_a_pushs_first_read_gives_the_board_the_events_bans_the_submission_and_the_entry(
             self, store: BoardStore) -> None:
         record = make_record("Ada", lap(12000))
-        assert store.push_reads("nowhere", "ada", record.submission_id) == (None, EventBans(), 0, None, None)
-        first = store.push_reads(TRACK, "ada", record.submission_id)
+        assert store.push_reads("nowhere", "ada", record.submission_id, [], 5) == (
+            None, EventBans(), 0, None, None, [])
+        first = store.push_reads(TRACK, "ada", record.submission_id, [], 5)
         assert (first.board, first.submission, first.entry) == (store.get_board(TRACK), None, None)
         stored = submit(store, record, at(1))
         version = store.save_event_bans(EventBans(racers=["bob"]), 0)
-        read = store.push_reads(TRACK, "ada", record.submission_id)
+        read = store.push_reads(TRACK, "ada", record.submission_id, [], 5)
         assert read.board == store.get_board(TRACK) and read.board is not None
         assert read.board.participants == 1
         assert (read.bans, read.bans_version) == (EventBans(racers=["bob"]), version) == store.event_bans()
         assert read.submission == store.get_submission(TRACK, "ada", record.submission_id)
         assert read.submission is not None and read.submission.submitted_at == stored.entry.achieved_at
         assert read.entry == stored.entry == store.get_entry(TRACK, "ada")
-        other = store.push_reads(TRACK, "bob", record.submission_id)
+        other = store.push_reads(TRACK, "bob", record.submission_id, [], 5)
         assert (other.submission, other.entry) == (None, None)
+
+    def test_a_pushs_first_read_tells_who_else_drove_each_of_its_runs(self, store: BoardStore) -> None:
+        """Each run's authors anywhere, and the runs of its lane within the tolerance, in the
+        order of the push's runs; a run too short to compare has no near runs looked for."""
+        three = [(9000, 100), (9100, 100), (9200, 100)]
+        ada, short = make_record("Ada", three), make_record("Ada", lap(12000))
+        board = make_board()
+        store.create_board(board)
+        for record, when in ((ada, 1), (short, 2)):
+            submission, entry = write_for(record, board, at(when))
+            store.record_submission(submission, record.model_dump_json(), entry, None,
+                                    fingerprints=evaluation_fingerprints(record),
+                                    runs=run_prints(record))
+        [run], [short_run] = run_prints(ada), run_prints(short)
+        near = run._replace(fingerprint="f-elsewhere", laps_ms=[9003, 9104, 9198])
+        far = run._replace(fingerprint="f-far", laps_ms=[9020, 9100, 9200])
+        read = store.push_reads(TRACK, "bob", "0" * 64, [run, short_run, near, far], 5)
+        authors = [[(a.racer_key, a.board_id) for a in seen.authors] for seen in read.runs]
+        assert authors == [[("ada", TRACK)], [("ada", TRACK)], [], []]
+        assert [[(n.racer_key, n.laps_ms) for n in seen.near] for seen in read.runs] == [
+            [("ada", [9000, 9100, 9200])], [], [("ada", [9000, 9100, 9200])], []]
 
     def test_duplicate_of_an_older_submission_keeps_the_best(self, store: BoardStore) -> None:
         slow, fast = make_record("Ada", lap(13000)), make_record("Ada", lap(12000))

@@ -490,7 +490,7 @@ def test_a_board_no_season_took_in_says_so_until_one_does(dynamodb_local: Dynamo
     the first season to take it in removes that for good."""
     store = DynamoDbStore(local_table, dynamodb_local.client())
     store.create_board(named_board("jan"))
-    fresh = store.push_reads("jan", "ada", "0" * 64).board
+    fresh = store.push_reads("jan", "ada", "0" * 64, [], 5).board
     assert fresh is not None and not fresh.maybe_in_a_season
     store.save_season(season(rounds=("jan",)), {"jan": link()})
     store.save_season(season(version=2), {"jan": None})

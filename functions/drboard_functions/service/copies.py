@@ -28,7 +28,7 @@ from drboard_assembler.record import EvaluationRun, Record
 from .. import display
 from ..errors import CopiedRun
 from ..models.domain import RunAuthor, RunPrint
-from ..stores.base import BoardStore
+from ..stores.base import BoardStore, RunSeen
 
 #: Runs of at least this many laps are fingerprinted by their times and compared for near-copies.
 MIN_LAPS = 3
@@ -95,13 +95,12 @@ class Verdict:
 
 
 def judge(store: BoardStore, board_id: str, racer_key: str, prints: list[RunPrint],
-          *, refuse: bool) -> Verdict:
-    """Who holds each run of a submission. With ``refuse`` (a racer's push), a run another racer
-    pushed first is refused (CopiedRun); otherwise (an organiser's hand) it is stored and both
-    runs flagged."""
+          seen: list[RunSeen], *, refuse: bool) -> Verdict:
+    """Who holds each run of a submission, from who else drove each (``seen``, read with the
+    push's first reads). With ``refuse`` (a racer's push), a run another racer pushed first is
+    refused (CopiedRun); otherwise (an organiser's hand) it is stored and both runs flagged."""
     verdict = Verdict()
-    for run in prints:
-        authors = store.run_authors(run.fingerprint)
+    for run, (authors, near_runs) in zip(prints, seen, strict=True):
         others = [author for author in authors if author.racer_key != racer_key]
         if others:
             mine = next((a for a in authors if a.racer_key == racer_key), None)
@@ -120,7 +119,7 @@ def judge(store: BoardStore, board_id: str, racer_key: str, prints: list[RunPrin
                     verdict.take_over.append(run.fingerprint)
                 verdict.others += [(author, COPIED) for author in others]
         if run.laps_ms:
-            for near in store.near_runs(run.lane, run.laps_ms[0], NEAR_MS):
+            for near in near_runs:
                 if (near.racer_key != racer_key and near.fingerprint != run.fingerprint
                         and same_laps(run.laps_ms, near.laps_ms)):
                     verdict.flag(NEAR_COPY, f"laps within {NEAR_MS} ms of {near.racer_key!r}'s "

@@ -59,7 +59,7 @@ from ..stores.base import (
 )
 from ..views import design_of, entry_view, history_item
 from .boards import BoardKeeper, check_open, default_board_id, racer_key
-from .copies import Verdict, judge, run_prints
+from .copies import NEAR_MS, Verdict, judge, run_prints
 
 _ALIAS: TypeAdapter[str] = TypeAdapter(Alias)
 #: How many times a push is checked again when the board's settings change under it.
@@ -92,9 +92,9 @@ class Pushing:
         skeleton = confusable_skeleton(record.racer)
         archived = False
         for _ in range(SETTINGS_ATTEMPTS):
-            # The board, the event's bans, a duplicate and the racer's entry: one read (again
-            # when the board's settings changed meanwhile).
-            read = self.store.push_reads(board_id, key, record.submission_id)
+            # The board, the event's bans, a duplicate, the racer's entry and who else drove
+            # each run: read at once (again when the board's settings changed meanwhile).
+            read = self.store.push_reads(board_id, key, record.submission_id, prints, NEAR_MS)
             stored_board = self.keeper.for_record(record, board_id, read.board, now)
             board = stored_board.board
             check_not_banned(board, read.bans, record.racer, caller)
@@ -103,7 +103,7 @@ class Pushing:
             check_open(board, now)
             self._check_final(stored_board, record.racer)
             self._check_limits(board, key, record.racer, now)
-            verdict = judge(self.store, board_id, key, prints, refuse=not caller.organiser)
+            verdict = judge(self.store, board_id, key, prints, read.runs, refuse=not caller.organiser)
             submission, entry = scored_write(record, board, now, verdict.flags)
             if not archived:
                 keep_in_archive(self.archive, board_id, record.submission_id, record_json)

@@ -45,16 +45,34 @@ class StoredBoard(NamedTuple):
     maybe_in_a_season: bool = True
 
 
+class RunSeen(NamedTuple):
+    """Who else drove one run of a push: every racer who pushed its fingerprint, anywhere, with
+    their first time, and the indexed runs of its lane whose best complete lap is within the
+    near-copy tolerance (none looked for when the run has too few laps to compare)."""
+
+    authors: list[RunAuthor]
+    near: list[NearRun]
+
+
 class PushReads(NamedTuple):
-    """What a push reads before it writes, in one read where the store can: the board (None:
-    no such board), the event's bans and their version, the racer's submission of the run
-    pushed (a duplicate; None: not yet on the board), and the racer's entry on the board."""
+    """What a push reads before it writes, at once where the store can: the board (None: no
+    such board), the event's bans and their version, the racer's submission of the run pushed
+    (a duplicate; None: not yet on the board), the racer's entry on the board, and who else
+    drove each of the push's runs (in the order of its prints)."""
 
     board: StoredBoard | None
     bans: EventBans
     bans_version: int
     submission: Submission | None
     entry: Entry | None
+    runs: list[RunSeen]
+
+
+def runs_seen(store: BoardStore, prints: Sequence[RunPrint], near_ms: int) -> list[RunSeen]:
+    """Who else drove each run, read one query at a time."""
+    return [RunSeen(store.run_authors(run.fingerprint),
+                    store.near_runs(run.lane, run.laps_ms[0], near_ms) if run.laps_ms else [])
+            for run in prints]
 
 
 class LimitReached(Exception):
@@ -353,8 +371,10 @@ class BoardStore(NoticeStore, Protocol):
     def get_submission(self, board_id: str, racer_key: str, submission_id: str) -> Submission | None:
         """One submission of the racer on the board."""
 
-    def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
-        """A push's first reads (see ``PushReads``), in one read where the store can."""
+    def push_reads(self, board_id: str, racer_key: str, submission_id: str,
+                   prints: Sequence[RunPrint], near_ms: int) -> PushReads:
+        """A push's first reads (see ``PushReads``), at once where the store can; ``near_ms``
+        is the near-copy tolerance the runs' lanes are read with."""
 
     def tally(self, board_id: str, racer_key: str) -> RacerTally:
         """How many submissions the racer made on the board, and when the last one was."""

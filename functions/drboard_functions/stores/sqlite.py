@@ -65,6 +65,7 @@ from .base import (
     new_rows,
     page_token,
     read_page_token,
+    runs_seen,
     stored_record,
     stored_webhook,
 )
@@ -480,11 +481,12 @@ class SqliteStore(SqliteSeasons):
             "AND racer_key = ?", (board_id, submission_id, racer_key)).fetchone()
         return Submission.model_validate_json(row[0]) if row else None
 
-    def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
+    def push_reads(self, board_id: str, racer_key: str, submission_id: str,
+                   prints: Sequence[RunPrint], near_ms: int) -> PushReads:
         bans, version = self.event_bans()
         return PushReads(self.get_board(board_id), bans, version,
                          self.get_submission(board_id, racer_key, submission_id),
-                         self.get_entry(board_id, racer_key))
+                         self.get_entry(board_id, racer_key), runs_seen(self, prints, near_ms))
 
     def tally(self, board_id: str, racer_key: str) -> RacerTally:
         return self._tally(self._db, board_id, racer_key)

@@ -9,6 +9,7 @@ neither exists. Only this package talks to DynamoDB.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from datetime import datetime, timedelta
 from typing import TYPE_CHECKING, Any
 
@@ -48,6 +49,7 @@ from ..base import (
     Indexed,
     PushReads,
     RankBuild,
+    RunSeen,
     StoredBoard,
     StoredSubmissionPage,
     SubmissionPage,
@@ -57,7 +59,6 @@ from ..base import (
     stored_record,
     stored_webhook,
 )
-from .bulk import BulkWrite
 from .codecs import (
     ALIAS_PARTITION,
     BANS_SK,
@@ -123,6 +124,9 @@ BATCH_GET_KEYS = 100
 #: How long the table keeps a sent marker (its time to live): past any retry of its event.
 NOTICE_TTL = timedelta(days=30)
 
+
+#: At most this many of a push's copy-check queries at once (two per run of the record).
+COPY_READERS = 8
 
 @translating("the board's table")
 class DynamoDbStore(DynamoDbSeasons):
@@ -358,6 +362,8 @@ class DynamoDbStore(DynamoDbSeasons):
                  if skeleton_sk(s) in found})
 
     def import_batch(self, board_id: str, batch: ImportBatch) -> ImportWritten:
+        from .bulk import BulkWrite  # only an import writes in bulk: a push never loads it
+
         return BulkWrite(self, board_id, batch).run()
 
     # ---- event-wide bans ------------------------------------------------------------------
@@ -365,7 +371,22 @@ class DynamoDbStore(DynamoDbSeasons):
     def event_bans(self) -> tuple[EventBans, int]:
         return _bans(self.get_item(EVENT_PARTITION, BANS_SK))
 
-    def push_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
+    def push_reads(self, board_id: str, racer_key: str, submission_id: str,
+                   prints: Sequence[RunPrint], near_ms: int) -> PushReads:
+        # The copy checks' queries go out while the batch read is answered (the client is
+        # thread-safe): a push of one run waits for one round trip where it waited for three.
+        with ThreadPoolExecutor(max_workers=min(2 * len(prints), COPY_READERS) or 1) as pool:
+            authors = [pool.submit(self.run_authors, run.fingerprint) for run in prints]
+            near = [pool.submit(self.near_runs, run.lane, run.laps_ms[0], near_ms) if run.laps_ms
+                    else None for run in prints]
+            read = self._first_reads(board_id, racer_key, submission_id)
+            runs = [RunSeen(author.result(), lane.result() if lane else [])
+                    for author, lane in zip(authors, near, strict=True)]
+        return read._replace(runs=runs)
+
+    def _first_reads(self, board_id: str, racer_key: str, submission_id: str) -> PushReads:
+        """The board, the event's bans, the duplicate and the entry in one read (``runs`` left
+        empty)."""
         submission_key, entry_key = submission_sk(racer_key, submission_id), entry_sk(racer_key)
         wanted = [key(board_id, BOARD_SK), key(EVENT_PARTITION, BANS_SK),
                   key(board_id, submission_key), key(board_id, entry_key)]
@@ -374,14 +395,14 @@ class DynamoDbStore(DynamoDbSeasons):
         if answer.get("UnprocessedKeys"):  # throttled: one read at a time
             return PushReads(self.get_board(board_id), *self.event_bans(),
                              self.get_submission(board_id, racer_key, submission_id),
-                             self.get_entry(board_id, racer_key))
+                             self.get_entry(board_id, racer_key), [])
         found = {item["sk"]["S"]: item for item in answer.get("Responses", {}).get(self.table, [])}
         board, submission, entry = (found.get(sk) for sk in (BOARD_SK, submission_key, entry_key))
         if board is not None:
             self.ranks.note(board_id, board)
         return PushReads(stored_board(board) if board else None, *_bans(found.get(BANS_SK)),
                          submission_of(submission) if submission else None,
-                         entry_of(entry) if entry else None)
+                         entry_of(entry) if entry else None, [])
 
     def save_event_bans(self, bans: EventBans, version: int) -> int:
         condition, values = bans_condition(version)
