@@ -128,6 +128,7 @@ NOTICE_TTL = timedelta(days=30)
 #: At most this many of a push's copy-check queries at once (two per run of the record).
 COPY_READERS = 8
 
+
 @translating("the board's table")
 class DynamoDbStore(DynamoDbSeasons):
     """The board in DynamoDB. Throttling, and a push that keeps losing races with others on the
