@@ -75,3 +75,9 @@ def is_default_board_id(board_id: str) -> bool:
             if board_id.endswith(suffix) and base and catalog.get(base) is not None:
                 return True
     return False
+
+
+def made_by_a_push(board_id: str) -> bool:
+    """Whether a run's push makes the board when it is missing: a catalog track's default board,
+    or a custom track's. Any other board is an organiser's to create."""
+    return is_default_board_id(board_id) or board_id.startswith(CUSTOM_PREFIX)

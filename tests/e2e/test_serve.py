@@ -167,6 +167,33 @@ def test_ctrl_c_stops_serve_and_keeps_every_answered_push(tmp_path: Path) -> Non
     assert len(json.loads(local.stdout)["entries"]) == 3
 
 
+def _until_the_join_line(served: Served) -> str:
+    """What serve printed after its first line, up to the join command racers type."""
+    assert served.process.stdout is not None
+    printed = []
+    while not printed or "Racers join with" not in printed[-1]:
+        printed.append(served.process.stdout.readline())
+    return "".join(printed)
+
+
+def test_serving_a_board_that_is_not_there_tells_the_organiser(tmp_path: Path) -> None:
+    """A named board that does not exist yet would refuse every racer the join line sends to
+    it; a track's own board is made by its first push and needs no word."""
+    missing = _serve(tmp_path, "--board", "club-night", db=tmp_path / "event.db")
+    try:
+        printed = _until_the_join_line(missing)
+    finally:
+        missing.stop()
+    assert "No board 'club-night' here yet" in printed
+    assert "drboard board create club-night --track TRACK --title TITLE" in printed
+    track = _serve(tmp_path, "--board", "reInvent2019_track", db=tmp_path / "event.db")
+    try:
+        printed = _until_the_join_line(track)
+    finally:
+        track.stop()
+    assert "No board" not in printed and "--board reInvent2019_track" in printed
+
+
 # ---- organisers, over HTTP with the CLI's own client --------------------------------------------
 
 

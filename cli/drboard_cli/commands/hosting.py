@@ -32,7 +32,8 @@ def desk_path(db: Path) -> Path:
 @click.option("--endpoint-url", metavar="URL",
               help="With --table: the DynamoDB endpoint, e.g. DynamoDB Local's http://127.0.0.1:8001.")
 @click.option("--board", "board_id", metavar="BOARD",
-              help="The night's board: its big-screen address and push command are printed.")
+              help="The night's board: its big-screen address and push command are printed "
+                   "(and a word when it is not there yet).")
 @click.option("--max-joins", type=click.IntRange(1, 10_000), default=100, show_default=True,
               help="How many racers one join code may join; then rotate it (`drboard joins rotate`).")
 @click.option("--token-hours", type=click.FloatRange(0.1, 24 * 30), default=24, show_default=True,
@@ -54,6 +55,7 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
     The log says who pushed which model, its time and rank, and every refusal. Ctrl-C stops it;
     every push that was answered is saved.
     """
+    from drboard_functions.board_ids import made_by_a_push
     from drboard_functions.notify.notifier import NoticeWorker
     from drboard_functions.services import dynamodb_service, sqlite_service
 
@@ -83,6 +85,10 @@ def serve(ctx: Context, host: str, port: int, table: str | None, endpoint_url: s
         for shown in boards or ["BOARD"]:
             out().print(f"  Big screen:   {url}/boards/{quote(shown, safe='')}/view?screen=1",
                         soft_wrap=True, highlight=False)
+        if board_id and service.board_version(board_id) is None and not made_by_a_push(board_id):
+            out().print(f"  No board {board_id!r} here yet: racers' pushes to it are refused until "
+                        f"you create it (`drboard board create {board_id} --track TRACK --title "
+                        "TITLE`).", style="yellow", soft_wrap=True, highlight=False)
         push = "drboard push ./my-model" + (f" --board {board_id}" if board_id else "")
         stop = threading.Event()
         announcer = threading.Thread(target=_announce_codes, args=(desk, url, push, stop), daemon=True)

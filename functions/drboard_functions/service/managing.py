@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..board_ids import CUSTOM_PREFIX, default_board_id, is_default_board_id
+from ..board_ids import default_board_id, made_by_a_push
 from ..errors import BoardExists, BoardLocked, BoardNotFound, InvalidQuery
 from ..identity import LOCAL_ORGANISER, Caller
 from ..models.domain import BoardConditions, BoardRules, BoardStatus
@@ -26,8 +26,8 @@ class Managing:
     def create_board(self, spec: BoardSpec, caller: Caller = LOCAL_ORGANISER) -> BoardView:
         now = self.clock()
         track, direction = spec_track(spec)
-        if is_default_board_id(spec.board_id) or spec.board_id == default_board_id(
-                track, direction, spec.race_type) or spec.board_id.startswith(CUSTOM_PREFIX):
+        if made_by_a_push(spec.board_id) or spec.board_id == default_board_id(
+                track, direction, spec.race_type):
             raise BoardExists(f"{spec.board_id!r} is a track's default board id; "
                               "give a named board an id of its own")
         board = valid_board(
