@@ -168,11 +168,15 @@ def test_ctrl_c_stops_serve_and_keeps_every_answered_push(tmp_path: Path) -> Non
 
 
 def _until_the_join_line(served: Served) -> str:
-    """What serve printed after its first line, up to the join command racers type."""
+    """What serve printed after its first line, up to the join command racers type; then waits
+    until it answers (a Ctrl-C in its first milliseconds, before it serves, is not what this
+    checks)."""
     assert served.process.stdout is not None
     printed = []
     while not printed or "Racers join with" not in printed[-1]:
         printed.append(served.process.stdout.readline())
+    with urllib.request.urlopen(served.url + "/", timeout=30) as answer:
+        assert answer.status == 200
     return "".join(printed)
 
 
